@@ -1,0 +1,66 @@
+// Field queries through the reference tree evaluator: a bunny00 mesh leaf at points within its
+// support radius, and the 250-curve snake; 1 and 2 threads (TBB arenas).
+#include "bench/bench_util.hpp"
+#include "nodes/mesh_leaf.hpp"
+#include "runtime/builder.hpp"
+#include "tools/scenes.hpp"
+
+#include <benchmark/benchmark.h>
+#include <glm/geometric.hpp>
+#include <tbb/task_arena.h>
+
+#include <random>
+
+namespace {
+
+using namespace ht;
+
+// Points within the support: a random vertex, moved by a random offset shorter than R.
+std::vector<glm::dvec3> near_surface(const MeshLeaf& m, double R, std::size_t count) {
+  std::mt19937_64 rng(7);
+  std::uniform_int_distribution<std::size_t> vertex(0, m.positions().size() - 1);
+  std::uniform_real_distribution<double> u(-1, 1);
+  std::vector<glm::dvec3> pts;
+  while (pts.size() < count) {
+    const glm::dvec3 d(u(rng), u(rng), u(rng));
+    if (glm::length(d) > 1) continue;
+    pts.push_back(m.positions()[vertex(rng)] + R * d);
+  }
+  return pts;
+}
+
+void run(benchmark::State& state, const Tree& tree, const std::vector<glm::dvec3>& pts) {
+  std::vector<double> values(pts.size());
+  tbb::task_arena arena(static_cast<int>(state.range(0)));
+  for (auto _ : state) {
+    arena.execute([&] { tree.field(pts, values); });
+    benchmark::DoNotOptimize(values.data());
+  }
+  state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations() * pts.size()));
+}
+
+void BM_TreeField_Bunny00(benchmark::State& state) {
+  static const auto leaf = MeshLeaf::load(bench::cgal_mesh("bunny00.off"));
+  const double R = 0.02 * glm::length(leaf->bounds().size());
+  static Builder b(0.5);
+  static const Tree tree = b.build(b.mesh(leaf, {R, 1.0}));
+  static const auto pts = near_surface(*leaf, R, bench::quick_mode ? 20000 : 200000);
+  run(state, tree, pts);
+}
+BENCHMARK(BM_TreeField_Bunny00)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+void BM_TreeField_Snake250(benchmark::State& state) {
+  static Builder b(0.5);
+  static const Tree tree = b.build(scenes::snake(b, 250));
+  static const auto pts = [] {
+    std::mt19937_64 rng(8);
+    std::uniform_real_distribution<double> x(-1, 13), yz(-2, 2);
+    std::vector<glm::dvec3> p;
+    for (int i = 0; i < (bench::quick_mode ? 2000 : 20000); ++i) p.push_back({x(rng), yz(rng), yz(rng)});
+    return p;
+  }();
+  run(state, tree, pts);
+}
+BENCHMARK(BM_TreeField_Snake250)->Arg(1)->Arg(2)->Unit(benchmark::kMillisecond)->UseRealTime();
+
+}  // namespace

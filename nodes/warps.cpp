@@ -1,0 +1,258 @@
+// Warps. References: Barr, "Global and local deformations of solid primitives" (SIGGRAPH 1984)
+// for twist, taper and bend and their inverses; Sederberg & Parry, "Free-form deformation of
+// solid geometric models" (SIGGRAPH 1986).
+#include "nodes/warps.hpp"
+
+#include <glm/geometric.hpp>
+#include <glm/mat3x3.hpp>
+#include <glm/matrix.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <numbers>
+#include <vector>
+
+namespace ht {
+namespace {
+
+glm::dvec3 apply3x4(const double* m, const glm::dvec3& p) {
+  return {m[0] * p.x + m[1] * p.y + m[2] * p.z + m[3], m[4] * p.x + m[5] * p.y + m[6] * p.z + m[7],
+          m[8] * p.x + m[9] * p.y + m[10] * p.z + m[11]};
+}
+
+// Local frame of a Barr warp: h along the axis, (v, w) the turning plane, all from the center.
+struct Frame {
+  int axis;
+  glm::dvec3 center;
+  int iv() const { return (axis + 1) % 3; }
+  int iw() const { return (axis + 2) % 3; }
+  glm::dvec3 to_local(const glm::dvec3& p) const {
+    const glm::dvec3 q = p - center;
+    return {q[axis], q[iv()], q[iw()]};
+  }
+  glm::dvec3 to_world(const glm::dvec3& l) const {
+    glm::dvec3 q;
+    q[axis] = l.x;
+    q[iv()] = l.y;
+    q[iw()] = l.z;
+    return q + center;
+  }
+};
+
+Frame frame_of(const double* s) { return {static_cast<int>(s[0]), {s[1], s[2], s[3]}}; }
+
+double taper_scale(const double* s, double h) {
+  const double h0 = s[4], h1 = s[5], s0 = s[6], s1 = s[7];
+  const double t = std::clamp((h - h0) / (h1 - h0), 0.0, 1.0);
+  return s0 + (s1 - s0) * t;
+}
+
+// sin(theta)/theta and (1 - cos(theta))/theta, stable near 0 so that rate -> 0 is the identity.
+double sinc(double t) { return std::abs(t) < 1e-4 ? 1.0 - t * t / 6.0 : std::sin(t) / t; }
+double cosc(double t) { return std::abs(t) < 1e-4 ? t / 2.0 - t * t * t / 24.0 : (1.0 - std::cos(t)) / t; }
+
+double bernstein(int n, int i, double t) {
+  double binom = 1.0;
+  for (int k = 1; k <= i; ++k) binom = binom * (n - i + k) / k;
+  return binom * std::pow(t, i) * std::pow(1.0 - t, n - i);
+}
+
+// The frame only permutes and translates coordinates, so boxes map to boxes.
+Aabb local_box(const Frame& f, const Aabb& box) {
+  Aabb out;
+  out.grow(f.to_local(box.lo));
+  out.grow(f.to_local(box.hi));
+  return out;
+}
+Aabb world_box(const Frame& f, const Aabb& local) {
+  Aabb out;
+  out.grow(f.to_world(local.lo));
+  out.grow(f.to_world(local.hi));
+  return out;
+}
+
+}  // namespace
+
+void bend_forward(double h0, double h1, double k, double& u, double& v) {
+  const double hc = std::clamp(u, h0, h1);
+  const double theta = k * hc;
+  const double c = std::cos(theta), s = std::sin(theta);
+  // The bent part follows the circle of radius 1/k about (0, 1/k); beyond the range, the
+  // continuation is the rigid motion of the range's end.
+  const double du = u - hc;
+  const double nu = hc * sinc(theta) + c * du - s * v;
+  const double nv = hc * cosc(theta) + s * du + c * v;
+  u = nu;
+  v = nv;
+}
+
+void bend_inverse(double h0, double h1, double k, double& u, double& v) {
+  // The angle of the point about the centre of curvature gives the slice it came from.
+  double hc = std::clamp(u, h0, h1);
+  if (k != 0.0) hc = std::clamp(std::atan2(k * u, 1.0 - k * v) / k, h0, h1);
+  const double theta = k * hc;
+  const double c = std::cos(theta), s = std::sin(theta);
+  const double du = u - hc * sinc(theta), dv = v - hc * cosc(theta);
+  u = hc + c * du + s * dv;
+  v = -s * du + c * dv;
+}
+
+bool affine_from_matrix(const double* m, double* out) {
+  glm::dmat3 a(1.0);
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) a[c][r] = m[4 * r + c];  // glm is column-major
+  const double det = glm::determinant(a);
+  double scale = 0.0;
+  for (int r = 0; r < 3; ++r)
+    for (int c = 0; c < 3; ++c) scale = std::max(scale, std::abs(m[4 * r + c]));
+  if (!std::isfinite(det) || !(std::abs(det) > 1e-12 * scale * scale * scale)) return false;
+  const glm::dmat3 inv = glm::inverse(a);
+  const glm::dvec3 t(m[3], m[7], m[11]);
+  const glm::dvec3 it = -(inv * t);
+  std::copy(m, m + 12, out);
+  for (int r = 0; r < 3; ++r) {
+    for (int c = 0; c < 3; ++c) out[12 + 4 * r + c] = inv[c][r];
+    out[12 + 4 * r + 3] = it[r];
+  }
+  return true;
+}
+
+glm::dvec3 warp_forward(NodeKind kind, const double* s, const glm::dvec3& p) {
+  switch (kind) {
+    case NodeKind::Affine: return apply3x4(s, p);
+    case NodeKind::Twist: {
+      const Frame f = frame_of(s);
+      glm::dvec3 l = f.to_local(p);
+      const double a = s[4] * l.x, c = std::cos(a), sn = std::sin(a);
+      l = {l.x, c * l.y - sn * l.z, sn * l.y + c * l.z};
+      return f.to_world(l);
+    }
+    case NodeKind::Taper: {
+      const Frame f = frame_of(s);
+      glm::dvec3 l = f.to_local(p);
+      const double k = taper_scale(s, l.x);
+      return f.to_world({l.x, k * l.y, k * l.z});
+    }
+    case NodeKind::Bend: {
+      const Frame f = frame_of(s);
+      glm::dvec3 l = f.to_local(p);
+      bend_forward(s[4], s[5], s[6], l.x, l.y);
+      return f.to_world(l);
+    }
+    case NodeKind::Ffd: {
+      const glm::dvec3 lo(s[0], s[1], s[2]), hi(s[3], s[4], s[5]);
+      if (!Aabb{lo, hi}.contains(p)) return p;
+      const int dims[3] = {static_cast<int>(s[6]), static_cast<int>(s[7]), static_cast<int>(s[8])};
+      const glm::dvec3 t = (p - lo) / (hi - lo);
+      const double* pts = s + kFfdHeader;
+      glm::dvec3 out(0.0);
+      for (int k = 0; k <= dims[2]; ++k) {
+        const double bk = bernstein(dims[2], k, t.z);
+        for (int j = 0; j <= dims[1]; ++j) {
+          const double bj = bk * bernstein(dims[1], j, t.y);
+          for (int i = 0; i <= dims[0]; ++i) {
+            const double w = bj * bernstein(dims[0], i, t.x);
+            const int idx = 3 * (i + (dims[0] + 1) * (j + (dims[1] + 1) * k));
+            out += w * glm::dvec3(pts[idx], pts[idx + 1], pts[idx + 2]);
+          }
+        }
+      }
+      return out;
+    }
+    default: return p;
+  }
+}
+
+glm::dvec3 warp_inverse(NodeKind kind, const double* s, const glm::dvec3& p) {
+  switch (kind) {
+    case NodeKind::Affine: return apply3x4(s + 12, p);
+    case NodeKind::Twist: {
+      // Twisting keeps h, so the inverse turns back by rate*h.
+      const Frame f = frame_of(s);
+      glm::dvec3 l = f.to_local(p);
+      const double a = -s[4] * l.x, c = std::cos(a), sn = std::sin(a);
+      l = {l.x, c * l.y - sn * l.z, sn * l.y + c * l.z};
+      return f.to_world(l);
+    }
+    case NodeKind::Taper: {
+      const Frame f = frame_of(s);
+      glm::dvec3 l = f.to_local(p);
+      const double k = taper_scale(s, l.x);
+      return f.to_world({l.x, l.y / k, l.z / k});
+    }
+    case NodeKind::Bend: {
+      const Frame f = frame_of(s);
+      glm::dvec3 l = f.to_local(p);
+      bend_inverse(s[4], s[5], s[6], l.x, l.y);
+      return f.to_world(l);
+    }
+    default: return p;
+  }
+}
+
+Aabb warp_bounds(NodeKind kind, const double* s, const Aabb& box) {
+  if (box.empty()) return box;
+  if (!box.finite()) return Aabb::everything();
+  switch (kind) {
+    case NodeKind::Affine: {
+      Aabb out;
+      for (int c = 0; c < 8; ++c)
+        out.grow(apply3x4(s, {(c & 1) ? box.hi.x : box.lo.x, (c & 2) ? box.hi.y : box.lo.y,
+                              (c & 4) ? box.hi.z : box.lo.z}));
+      return out;
+    }
+    case NodeKind::Twist: {
+      // Any turn about the axis stays within the farthest corner's distance from it.
+      const Frame f = frame_of(s);
+      const Aabb local = local_box(f, box);
+      double reach = 0.0;
+      for (double v : {local.lo.y, local.hi.y})
+        for (double w : {local.lo.z, local.hi.z}) reach = std::max(reach, std::hypot(v, w));
+      return world_box(f, {{local.lo.x, -reach, -reach}, {local.hi.x, reach, reach}});
+    }
+    case NodeKind::Taper: {
+      // Each slice scales about the axis by a factor between the two end scales.
+      const Frame f = frame_of(s);
+      const Aabb local = local_box(f, box);
+      const double smin = std::min(s[6], s[7]), smax = std::max(s[6], s[7]);
+      Aabb out{{local.lo.x, 0.0, 0.0}, {local.hi.x, 0.0, 0.0}};
+      for (int axis = 1; axis < 3; ++axis)
+        for (double k : {smin, smax})
+          for (double c : {local.lo[axis], local.hi[axis]}) {
+            out.lo[axis] = std::min(out.lo[axis], k * c);
+            out.hi[axis] = std::max(out.hi[axis], k * c);
+          }
+      return world_box(f, out);
+    }
+    case NodeKind::Bend: {
+      const Frame f = frame_of(s);
+      const double h0 = s[4], h1 = s[5], k = s[6];
+      const Aabb local = local_box(f, box);
+      Aabb out;
+      auto add = [&](double u, double v, double w) {
+        bend_forward(h0, h1, k, u, v);
+        out.grow(f.to_world({u, v, w}));
+      };
+      // Every slice moves rigidly in the (u, v) plane, and within the range the image of the
+      // box is an annular sector about the centre of curvature: its corners and the points
+      // where the sector crosses a quarter turn bound it.
+      std::vector<double> us = {local.lo.x, local.hi.x};
+      for (double h : {h0, h1})
+        if (h > local.lo.x && h < local.hi.x) us.push_back(h);
+      if (k != 0.0) {
+        constexpr double kQuarter = std::numbers::pi / 2;
+        const double a0 = k * std::clamp(local.lo.x, h0, h1), a1 = k * std::clamp(local.hi.x, h0, h1);
+        const double amin = std::min(a0, a1), amax = std::max(a0, a1);
+        for (double q = std::ceil(amin / (kQuarter)) * (kQuarter); q <= amax; q += kQuarter)
+          us.push_back(q / k);
+      }
+      for (double u : us)
+        for (double v : {local.lo.y, local.hi.y})
+          for (double w : {local.lo.z, local.hi.z}) add(u, v, w);
+      return out;
+    }
+    default: return Aabb::everything();  // ffd: its field lives on its deformed mesh
+  }
+}
+
+}  // namespace ht

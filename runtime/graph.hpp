@@ -1,0 +1,89 @@
+// The HybridTree as a flat, immutable node arena (structure of arrays).
+//
+// Node ids are indices; a node's children always have smaller ids than the node, so a forward
+// walk over ids is a valid post-order for any subset of the graph. Parameters are doubles in one
+// pool, laid out per kind (nodes/primitives.hpp, nodes/warps.hpp, runtime/graph.hpp below);
+// children are ranges of one index array. Nothing here is a pointer, so a Graph is cheap to copy,
+// to hash and to ship, and every node can be the root of its own query.
+#pragma once
+
+#include "nodes/kinds.hpp"
+#include "runtime/aabb.hpp"
+
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <string>
+#include <vector>
+
+namespace ht {
+
+class MeshLeaf;
+
+using NodeId = std::uint32_t;
+inline constexpr std::uint32_t kNone = ~0u;
+
+/// How a node asks to be meshed (SCENE_FORMAT.md, `mesher` on operators and warps).
+enum class MesherHint : std::uint8_t { Auto, Global, Local };
+
+/// Parameter layouts of the kinds not described in nodes/:
+///   mesh         R F kernel_radius r0 query_radius     (nodes/mesh_leaf.hpp, MeshFieldParams)
+///   crop         min(3) max(3)
+///   operators    none (children only; local_blend's children are a, b, region)
+inline constexpr int kMeshParams = 5;
+
+struct Graph {
+  // One entry per node.
+  std::vector<NodeKind> kind;
+  std::vector<BooleanMode> boolean;      ///< Booleans and local blend; Auto elsewhere
+  std::vector<MesherHint> mesher;
+  std::vector<std::uint32_t> param_begin, param_count;
+  std::vector<std::uint32_t> child_begin, child_count;
+  std::vector<std::uint32_t> mesh;       ///< index into meshes (mesh leaves), else kNone
+  std::vector<std::uint32_t> name;       ///< index into names, else kNone
+  /// Where the node's field may be non-zero, when the node is a root on its own (`auto` picks
+  /// min/max at the node) and when something above it blends (`auto` picks R-functions).
+  std::vector<Aabb> support_alone, support_blended;
+  /// The field is >= 0 everywhere (no negative strength reaches it).
+  std::vector<std::uint8_t> nonnegative;
+
+  /// Evaluation data derived from the parameters (a curve's sampled polyline), kept apart from
+  /// the model so that bytes() measures the model as the paper does.
+  std::vector<std::uint32_t> derived_begin, derived_count;
+
+  // Pools.
+  std::vector<double> params;
+  std::vector<double> derived;
+  std::vector<NodeId> children;
+  std::vector<std::string> names;
+  std::vector<std::shared_ptr<const MeshLeaf>> meshes;
+
+  std::size_t size() const { return kind.size(); }
+  std::span<const double> params_of(NodeId n) const { return {params.data() + param_begin[n], param_count[n]}; }
+  std::span<const NodeId> children_of(NodeId n) const {
+    return {children.data() + child_begin[n], child_count[n]};
+  }
+  /// What skeleton_distance() reads for a primitive: its skeleton parameters, or for a curve
+  /// its polyline block [n, x0 y0 z0, ...].
+  const double* skeleton_of(NodeId n) const {
+    return derived_count[n] ? derived.data() + derived_begin[n] : params.data() + param_begin[n] + 2;
+  }
+  const Aabb& support(NodeId n, bool under_blend) const {
+    return under_blend ? support_blended[n] : support_alone[n];
+  }
+  /// "name" if the node has one, else "type #id".
+  std::string label(NodeId n) const;
+  /// Bytes of the tree itself: the arena and its pools, not the meshes it names nor derived data.
+  std::size_t bytes() const;
+  /// Bytes of the derived evaluation data.
+  std::size_t derived_bytes() const { return derived.size() * sizeof(double); }
+};
+
+/// The top-level settings of a scene.
+struct MesherSettings {
+  double precision = 0.0;  ///< target edge length; 0 = choose from the scene's size
+  MesherHint strategy = MesherHint::Auto;
+  double blend_overlap = 0.5;  ///< the paper's rho threshold
+};
+
+}  // namespace ht

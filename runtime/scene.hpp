@@ -1,0 +1,29 @@
+// Scene format v1 (SCENE_FORMAT.md): JSON in, a Tree out, or one SceneError that names the JSON
+// path of the offending value and the rule it breaks:
+//   scene.json: root.children[2].radius: must be > 0
+// Unknown keys and unknown types are errors, not silently ignored.
+#pragma once
+
+#include "runtime/tree.hpp"
+
+#include <filesystem>
+#include <stdexcept>
+#include <string>
+
+namespace ht {
+
+struct SceneError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+/// Loads a scene file; relative mesh paths are resolved against the file's folder.
+Tree load_scene(const std::filesystem::path& file);
+
+/// Loads a scene from text; `source` names it in messages, `base_dir` resolves mesh paths.
+Tree load_scene_text(const std::string& text, const std::filesystem::path& base_dir,
+                     const std::string& source = "scene");
+
+/// Deepest nesting of nodes a scene may have (keeps every recursive walk far from the stack's end).
+inline constexpr int kMaxSceneDepth = 1000;
+
+}  // namespace ht

@@ -1,0 +1,58 @@
+#include "tests/support/test_support.hpp"
+
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cstdio>
+#include <fstream>
+#include <sstream>
+#include <sys/wait.h>
+#include <unistd.h>
+
+namespace ht::test {
+
+std::filesystem::path cgal_mesh(const std::string& name) {
+  auto p = std::filesystem::path(HYBRIDTREE_SOURCE_DIR) / "data" / "meshes" / name;
+  if (!std::filesystem::exists(p))
+    ADD_FAILURE() << p << " is missing: run tools/setup.sh to extract the libcgal-demo meshes";
+  return p;
+}
+
+std::filesystem::path shared_mesh(const std::string& name) {
+  auto p = std::filesystem::path(HYBRIDTREE_SOURCE_DIR) / ".." / "shared" / "data" / "meshes" / name;
+  return std::filesystem::exists(p) ? p : std::filesystem::path();
+}
+
+std::filesystem::path temp_dir(const std::string& tag) {
+  auto p = std::filesystem::temp_directory_path() / ("hybridtree-test-" + tag + "-" +
+                                                     std::to_string(::getpid()));
+  std::filesystem::remove_all(p);
+  std::filesystem::create_directories(p);
+  return p;
+}
+
+void write_file(const std::filesystem::path& file, const std::string& text) {
+  std::ofstream out(file, std::ios::binary);
+  out << text;
+}
+
+static std::string slurp(const std::filesystem::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+CliResult run_cli(const std::string& args, const std::string& input) {
+  auto dir = temp_dir("cli");
+  write_file(dir / "stdin", input);
+  std::string cmd = std::string("'") + HYBRIDTREE_CLI + "' " + args + " < '" + (dir / "stdin").string() +
+                    "' > '" + (dir / "stdout").string() + "' 2> '" + (dir / "stderr").string() + "'";
+  int status = std::system(cmd.c_str());
+  CliResult r{WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status), slurp(dir / "stdout"),
+              slurp(dir / "stderr")};
+  std::filesystem::remove_all(dir);
+  return r;
+}
+
+}  // namespace ht::test

@@ -1,0 +1,32 @@
+// Shared by the test suites: where the meshes are, a deterministic random source, and a way to
+// run the command-line tool.
+#pragma once
+
+#include <cstdint>
+#include <filesystem>
+#include <random>
+#include <string>
+
+namespace ht::test {
+
+/// data/meshes/NAME from tools/setup.sh (libcgal-demo); the test fails if it is missing.
+std::filesystem::path cgal_mesh(const std::string& name);
+/// ../shared/data/meshes/NAME beside the checkout, or empty when absent.
+std::filesystem::path shared_mesh(const std::string& name);
+/// A fresh empty folder for one test's files.
+std::filesystem::path temp_dir(const std::string& tag);
+/// Writes text to a file.
+void write_file(const std::filesystem::path& file, const std::string& text);
+
+/// Runs the hybridtree CLI with `args` (shell words), stdin from `input`; returns exit code and
+/// the captured stdout and stderr.
+struct CliResult {
+  int code;
+  std::string out, err;
+};
+CliResult run_cli(const std::string& args, const std::string& input = "");
+
+/// Deterministic random numbers: every property test seeds from its own name.
+using Rng = std::mt19937_64;
+
+}  // namespace ht::test

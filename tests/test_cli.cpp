@@ -1,0 +1,115 @@
+// The command-line tool end to end: output formats, exit codes and messages for bad input.
+#include "tests/support/test_support.hpp"
+#include "tools/scenes.hpp"
+
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <sstream>
+
+using namespace ht;
+
+namespace {
+
+std::string write_scene(const std::filesystem::path& dir, const std::string& name, const std::string& text) {
+  test::write_file(dir / name, text);
+  return (dir / name).string();
+}
+
+const char* kBall = R"({"hybridtree": 1, "root": {"type": "point", "center": [0,0,0], "radius": 2}})";
+
+}  // namespace
+
+TEST(Cli, EvalPrintsOneValuePerPointWithNineDigits) {
+  const auto dir = test::temp_dir("cli-eval");
+  const std::string s = write_scene(dir, "ball.json", kBall);
+  const auto r = test::run_cli("eval " + s, "0 0 0\n1 0 0\n\n# comment\n3 0 0\n");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_EQ(r.out, "1\n0.421875\n0\n");
+  const auto g = test::run_cli("eval " + s + " --gradient --engine tree", "1 0 0\n");
+  ASSERT_EQ(g.code, 0) << g.err;
+  std::istringstream in(g.out);
+  double f, gx, gy, gz;
+  in >> f >> gx >> gy >> gz;
+  EXPECT_DOUBLE_EQ(f, 0.421875);
+  EXPECT_NEAR(gx, -6.0 * 0.75 * 0.75 * 1.0 / 4.0, 1e-6);  // -6F(1-d²/R²)² x/R²
+  EXPECT_NEAR(gy, 0.0, 1e-9);
+  const auto p = test::run_cli("eval " + s + " --points " + (dir / "missing.txt").string());
+  EXPECT_EQ(p.code, 2);
+  EXPECT_NE(p.err.find("cannot open the points file"), std::string::npos);
+  std::filesystem::remove_all(dir);
+}
+
+TEST(Cli, BadPointsNameTheLine) {
+  const auto dir = test::temp_dir("cli-points");
+  const std::string s = write_scene(dir, "ball.json", kBall);
+  struct Case {
+    std::string input, expected;
+  };
+  for (const Case& c : std::vector<Case>{{"0 0 0\n1 2\n", "<stdin>:2: expected 3 numbers"},
+                                         {"0 0 0\n\n1 2 x\n", "<stdin>:3: \"x\" is not a number"},
+                                         {"nan 0 0\n", "<stdin>:1: \"nan\" is not a finite number"},
+                                         {"1 1 inf\n", "<stdin>:1: \"inf\" is not a finite number"},
+                                         {"1 1 1e999\n", "<stdin>:1: \"1e999\" is not a finite number"},
+                                         {"1 2 3 4\n", "<stdin>:1: expected 3 numbers"}}) {
+    const auto r = test::run_cli("eval " + s, c.input);
+    EXPECT_EQ(r.code, 2) << c.input;
+    EXPECT_NE(r.err.find(c.expected), std::string::npos) << r.err;
+    EXPECT_EQ(r.out, "") << "no partial output on bad input";
+  }
+  std::filesystem::remove_all(dir);
+}
+
+TEST(Cli, BadScenesExitTwoWithPathAndRule) {
+  const auto dir = test::temp_dir("cli-scene");
+  const std::string bad = write_scene(dir, "bad.json", R"({"hybridtree": 1, "root": {"type": "point", "center": [0,0,0], "radius": -1}})");
+  for (const char* cmd : {"info ", "eval "}) {
+    const auto r = test::run_cli(cmd + bad, "0 0 0\n");
+    EXPECT_EQ(r.code, 2);
+    EXPECT_NE(r.err.find("bad.json: root.radius: must be > 0"), std::string::npos) << r.err;
+  }
+  const auto missing = test::run_cli("info " + (dir / "nope.json").string());
+  EXPECT_EQ(missing.code, 2);
+  EXPECT_NE(missing.err.find("cannot open the scene file"), std::string::npos);
+  const auto garbage = test::run_cli("info " + write_scene(dir, "g.json", "\x01\x02garbage"));
+  EXPECT_EQ(garbage.code, 2);
+  EXPECT_NE(garbage.err.find("not valid JSON"), std::string::npos);
+  const auto usage = test::run_cli("frobnicate");
+  EXPECT_EQ(usage.code, 2);
+  std::filesystem::remove_all(dir);
+}
+
+TEST(Cli, InfoDescribesTheScene) {
+  const auto dir = test::temp_dir("cli-info");
+  std::filesystem::copy_file(test::cgal_mesh("eight.off"), dir / "eight.off");
+  const std::string s = write_scene(dir, "s.json", R"({"hybridtree": 1, "root": {"type": "blend", "children": [
+      {"type": "mesh", "file": "eight.off", "radius": 0.1},
+      {"type": "twist", "rate": 1, "child": {"type": "mesh", "file": "eight.off", "radius": 0.2}},
+      {"type": "segment", "a": [0,0,0], "b": [1,0,0], "radius": 0.5}]}})");
+  const auto r = test::run_cli("info " + s);
+  ASSERT_EQ(r.code, 0) << r.err;
+  for (const char* needle : {"nodes          5 (depth 3)", "mesh         2", "634 triangles", "tree bytes", "load time",
+                             "support        ["})
+    EXPECT_NE(r.out.find(needle), std::string::npos) << needle << "\n" << r.out;
+  // Loaded once: one mesh line.
+  EXPECT_EQ(r.out.find("634 triangles"), r.out.rfind("634 triangles"));
+  std::filesystem::remove_all(dir);
+}
+
+TEST(Cli, SnakeSceneRoundTripsThroughJson) {
+  const auto dir = test::temp_dir("cli-snake");
+  const std::string s = write_scene(dir, "snake.json", scenes::snake_json(250));
+  const auto r = test::run_cli("info " + s);
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("curve        250"), std::string::npos) << r.out;
+  // The JSON and the builder give the same field.
+  Builder b(0.5);
+  const Tree t = b.build(scenes::snake(b, 250));
+  const auto e = test::run_cli("eval " + s, "1 0 0.5\n5 0.5 0\n");
+  std::istringstream in(e.out);
+  double f1, f2;
+  in >> f1 >> f2;
+  EXPECT_NEAR(f1, t.field({1, 0, 0.5}), 1e-8 * std::max(1.0, std::abs(f1)));
+  EXPECT_NEAR(f2, t.field({5, 0.5, 0}), 1e-8 * std::max(1.0, std::abs(f2)));
+  std::filesystem::remove_all(dir);
+}
