@@ -13,6 +13,7 @@
 #include <OpenMesh/Core/IO/importer/ImporterT.hh>
 #include <embree3/rtcore.h>
 #include <glm/geometric.hpp>
+#include <glm/vec4.hpp>
 
 #include <algorithm>
 #include <array>
@@ -509,6 +510,7 @@ struct MeshLeaf::Accel {
   std::vector<glm::dvec3> face_normal;    // unit, zero for degenerate triangles
   std::vector<glm::dvec3> vertex_normal;  // angle-weighted sum of incident face normals
   std::vector<std::uint32_t> nbr;         // triangle across each half-edge: edge normal = sum of two
+  std::vector<glm::dvec4> sphere;         // per triangle: centroid and the farthest vertex's distance
   double scale = 0;                       // largest coordinate magnitude, for float slack
 
   Accel(const std::string& name, const std::vector<glm::dvec3>& pos, const std::vector<glm::uvec3>& tris,
@@ -585,6 +587,13 @@ struct MeshLeaf::Accel {
   void compute_normals(const std::vector<glm::dvec3>& pos, const std::vector<glm::uvec3>& tris,
                        std::vector<std::uint32_t> neighbours) {
     nbr = std::move(neighbours);
+    sphere.resize(tris.size());
+    for (std::size_t t = 0; t < tris.size(); ++t) {
+      const glm::dvec3 c = (pos[tris[t][0]] + pos[tris[t][1]] + pos[tris[t][2]]) / 3.0;
+      double r = 0.0;
+      for (int k = 0; k < 3; ++k) r = std::max(r, glm::length(pos[tris[t][k]] - c));
+      sphere[t] = glm::dvec4(c, r);
+    }
     face_normal.resize(tris.size());
     vertex_normal.assign(pos.size(), glm::dvec3(0.0));
     for (std::size_t t = 0; t < tris.size(); ++t) {
@@ -610,7 +619,7 @@ struct MeshLeaf::Accel {
 
   std::size_t bytes() const {
     return vertices.capacity() * sizeof(float) + (order.capacity() + offset.capacity() + nbr.capacity()) * 4 +
-           (face_normal.capacity() + vertex_normal.capacity()) * sizeof(glm::dvec3) +
+           (face_normal.capacity() + vertex_normal.capacity()) * sizeof(glm::dvec3) + sphere.capacity() * sizeof(glm::dvec4) +
            // Embree's own memory is not exposed: its index buffers (12 bytes per triangle) plus
            // a BVH estimate of 64 bytes per triangle (high-quality builds with spatial splits
            // measure around 40-80).
@@ -626,9 +635,11 @@ struct PointQueryState {
   const std::uint32_t* offset;
   const glm::dvec3* pos;
   const glm::uvec3* tris;
+  const glm::dvec4* sphere;
   glm::dvec3 p;
   float slack;
   double best2 = kInf;
+  double best = kInf;  // sqrt(best2)
   std::uint32_t tri = kNone;
   int feature = 0;
   glm::dvec3 closest{0.0};
@@ -839,18 +850,25 @@ namespace {
 bool point_query_visit(RTCPointQueryFunctionArguments* args) {
   auto* st = static_cast<PointQueryState*>(args->userPtr);
   const std::uint32_t t = st->order[st->offset[args->geomID] + args->primID];
+  // Most triangles Embree hands over are far: their bounding sphere rejects them before the
+  // exact (and costlier) closest-point computation.
+  const glm::dvec4 s = st->sphere[t];
+  const glm::dvec3 to_centre = st->p - glm::dvec3(s);
+  const double reach = s.w + st->best;
+  if (glm::dot(to_centre, to_centre) >= reach * reach) return false;
   const glm::uvec3 tri = st->tris[t];
   const Nearest n = nearest_on_triangle(st->p, st->pos[tri[0]], st->pos[tri[1]], st->pos[tri[2]]);
   const glm::dvec3 d = st->p - n.point;
   const double d2 = glm::dot(d, d);
   if (!(d2 < st->best2)) return false;
   st->best2 = d2;
+  st->best = std::sqrt(d2);
   st->tri = t;
   st->feature = n.feature;
   st->closest = n.point;
   // Embree culls with float boxes of float vertices; the slack keeps a triangle whose double
   // distance is barely below the current best from being culled by rounding.
-  const float r = static_cast<float>(std::sqrt(d2)) + st->slack;
+  const float r = static_cast<float>(st->best) + st->slack;
   if (r < args->query->radius) {
     args->query->radius = r;
     return true;
@@ -866,6 +884,7 @@ MeshLeaf::Closest MeshLeaf::query(const glm::dvec3& p, double radius) const {
                      accel_->offset.data(),
                      positions_.data(),
                      triangles_.data(),
+                     accel_->sphere.data(),
                      p,
                      static_cast<float>(8 * FLT_EPSILON * mag)};
   RTCPointQuery q;
@@ -877,7 +896,8 @@ MeshLeaf::Closest MeshLeaf::query(const glm::dvec3& p, double radius) const {
                                                     : static_cast<float>(std::max(radius, 0.0)) + st.slack;
   // Embree hands over every triangle of each leaf it reaches, near or not: only those within the
   // (slackened) radius may become the closest, or a far triangle's pseudo-normal would decide.
-  st.best2 = static_cast<double>(q.radius) * static_cast<double>(q.radius);
+  st.best = static_cast<double>(q.radius);
+  st.best2 = st.best * st.best;
   RTCPointQueryContext ctx;
   rtcInitPointQueryContext(&ctx);
   rtcPointQuery(accel_->scene.get(), &q, &ctx, point_query_visit, &st);
