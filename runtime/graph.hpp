@@ -73,10 +73,11 @@ struct Graph {
   }
   /// "name" if the node has one, else "type #id".
   std::string label(NodeId n) const;
-  /// Bytes of the tree itself: the arena and its pools, not the meshes it names nor derived data.
+  /// Bytes of the model itself: kinds, parameters, children, names (what the paper measures),
+  /// not the meshes it names nor anything derived from it.
   std::size_t bytes() const;
-  /// Bytes of the derived evaluation data.
-  std::size_t derived_bytes() const { return derived.size() * sizeof(double); }
+  /// Bytes of what is derived from the model to evaluate it: supports, signs, curve polylines.
+  std::size_t derived_bytes() const;
 };
 
 /// The top-level settings of a scene.

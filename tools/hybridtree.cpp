@@ -1,10 +1,12 @@
 // hybridtree: the command-line face of the library.
 //   hybridtree info SCENE                  what the scene holds and what it costs
 //   hybridtree eval SCENE [--points FILE]  field values (and gradients) at points
+//   hybridtree generate snake [--count N]  a procedural scene (JSON on stdout)
 // Exit codes: 0 success, 2 bad input (scene, points, arguments), 1 anything else.
 #include "nodes/mesh_leaf.hpp"
 #include "runtime/scene.hpp"
 #include "runtime/tree_eval.hpp"
+#include "tools/scenes.hpp"
 
 #include <CLI/CLI.hpp>
 
@@ -111,7 +113,8 @@ int cmd_info(const std::string& scene) {
     if (r.holes_closed)
       std::printf("               repaired: %zu holes closed with %zu triangles\n", r.holes_closed, r.triangles_added);
   }
-  std::printf("tree bytes     %zu\n", g.bytes());
+  std::printf("tree bytes     %zu (the model: kinds, parameters, children, names)\n", g.bytes());
+  std::printf("derived bytes  %zu (support boxes, curve polylines)\n", g.derived_bytes());
   if (!g.meshes.empty()) std::printf("mesh bytes     %zu (shared, loaded once per file)\n", mesh_bytes);
   std::printf("load time      %.3f s\n", load_s);
   return 0;
@@ -165,6 +168,16 @@ int main(int argc, char** argv) {
   eval->add_flag("--gradient", gradient, "Also print the gradient (three more columns)");
   eval->add_option("--engine", engine, "Evaluator: tree (the reference evaluator)")->check(CLI::IsMember({"tree"}));
 
+  int count = 250;
+  std::uint64_t seed = 1;
+  std::string generator;
+  auto* generate = app.add_subcommand("generate", "Write a procedural scene as JSON to stdout");
+  generate->add_option("scene", generator, "Which scene: snake (blended curve primitives)")
+      ->required()
+      ->check(CLI::IsMember({"snake"}));
+  generate->add_option("--count", count, "Number of primitives")->check(CLI::Range(1, 1000000));
+  generate->add_option("--seed", seed, "Random seed");
+
   try {
     app.parse(argc, argv);
   } catch (const CLI::ParseError& e) {
@@ -174,6 +187,11 @@ int main(int argc, char** argv) {
   try {
     if (*info) return cmd_info(scene);
     if (*eval) return cmd_eval(scene, points_file, gradient, engine);
+    if (*generate) {
+      const std::string text = ht::scenes::snake_json(count, seed);
+      std::fwrite(text.data(), 1, text.size(), stdout);
+      return std::fflush(stdout) == 0 ? 0 : 1;
+    }
   } catch (const ht::SceneError& e) {
     std::fprintf(stderr, "hybridtree: %s\n", e.what());
     return 2;
