@@ -953,7 +953,7 @@ bool point_query_visit(RTCPointQueryFunctionArguments* args) {
 }  // namespace
 
 MeshLeaf::Closest MeshLeaf::query(const glm::dvec3& p, double radius) const {
-  if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) return {kInf, false};
+  if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) return {kInf, false, p};
   const double mag = std::max({accel_->scale, std::abs(p.x), std::abs(p.y), std::abs(p.z)});
   PointQueryState st{accel_->records.data(),
                      accel_->offset.data(),
@@ -975,7 +975,7 @@ MeshLeaf::Closest MeshLeaf::query(const glm::dvec3& p, double radius) const {
   RTCPointQueryContext ctx;
   rtcInitPointQueryContext(&ctx);
   rtcPointQuery(accel_->scene.get(), &q, &ctx, point_query_visit, &st);
-  if (st.tri == kNone) return {kInf, inside(p)};
+  if (st.tri == kNone) return {kInf, inside(p), p};
   const double dist = std::sqrt(st.best2);
   // Baerentzen & Aanaes: p is inside iff p - closest points against the closest feature's
   // angle-weighted pseudo-normal. On the surface itself (dist 0) either answer gives the same
@@ -983,7 +983,7 @@ MeshLeaf::Closest MeshLeaf::query(const glm::dvec3& p, double radius) const {
   const bool in = dist > 0 && (accel_->needs_parity(st.tri, st.feature, st.closest, positions_, triangles_)
                                    ? inside(p)
                                    : glm::dot(p - st.closest, accel_->pseudo_normal(st.tri, st.feature, triangles_)) < 0);
-  return {dist <= radius ? dist : kInf, in};
+  return {dist <= radius ? dist : kInf, in, st.closest};
 }
 
 bool MeshLeaf::inside(const glm::dvec3& p) const {

@@ -65,6 +65,7 @@ class MeshLeaf {
   struct Closest {
     double distance;  ///< dM(p), or +infinity when no triangle lies within the radius
     bool inside;      ///< p is inside the solid (exact for any p, whatever the radius)
+    glm::dvec3 point{0.0};  ///< the nearest point on the mesh, when distance is finite
   };
   /// Distance to the nearest triangle if it is closer than `radius`, and the inside test.
   Closest query(const glm::dvec3& p, double radius) const;

@@ -32,6 +32,10 @@ enum class MesherHint : std::uint8_t { Auto, Global, Local };
 ///   operators    none (children only; local_blend's children are a, b, region)
 inline constexpr int kMeshParams = 5;
 
+/// Deepest nesting of nodes any walk accepts (scene loading, compilation): keeps every recursive
+/// walk far from the end of the stack.
+inline constexpr int kMaxTreeDepth = 1000;
+
 struct Graph {
   // One entry per node.
   std::vector<NodeKind> kind;

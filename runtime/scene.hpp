@@ -23,7 +23,7 @@ Tree load_scene(const std::filesystem::path& file);
 Tree load_scene_text(const std::string& text, const std::filesystem::path& base_dir,
                      const std::string& source = "scene");
 
-/// Deepest nesting of nodes a scene may have (keeps every recursive walk far from the stack's end).
-inline constexpr int kMaxSceneDepth = 1000;
+/// Deepest nesting of nodes a scene may have.
+inline constexpr int kMaxSceneDepth = kMaxTreeDepth;
 
 }  // namespace ht

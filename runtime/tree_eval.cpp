@@ -4,12 +4,16 @@
 #include "nodes/operators.hpp"
 #include "nodes/primitives.hpp"
 #include "nodes/warps.hpp"
+#include "runtime/tape.hpp"
+#include "runtime/tape_eval.hpp"
 #include "runtime/tree.hpp"
 
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cmath>
+#include <exception>
+#include <mutex>
 
 namespace ht {
 
@@ -79,27 +83,63 @@ glm::dvec3 reference_gradient(const Graph& g, NodeId n, double T, const glm::dve
   return grad;
 }
 
-Tree::Tree(std::shared_ptr<const Graph> graph, NodeId root, double threshold, MesherSettings settings)
-    : graph_(std::move(graph)), root_(root), threshold_(threshold), settings_(settings) {}
+struct Tree::Compiled {
+  std::once_flag once;
+  std::unique_ptr<TapeEvaluator> evaluator;
+  std::exception_ptr error;
+};
 
-double Tree::field(const glm::dvec3& p) const { return reference_field(*graph_, root_, threshold_, p); }
+Tree::Tree(std::shared_ptr<const Graph> graph, NodeId root, double threshold, MesherSettings settings)
+    : graph_(std::move(graph)), root_(root), threshold_(threshold), settings_(settings),
+      compiled_(std::make_shared<Compiled>()) {}
+
+const TapeEvaluator& Tree::evaluator() const {
+  std::call_once(compiled_->once, [&] {
+    try {
+      compiled_->evaluator =
+          std::make_unique<TapeEvaluator>(std::make_shared<const Tape>(compile_tape(graph_, root_, threshold_)));
+    } catch (...) {
+      compiled_->error = std::current_exception();
+    }
+  });
+  if (compiled_->error) std::rethrow_exception(compiled_->error);
+  return *compiled_->evaluator;
+}
+
+double Tree::field(const glm::dvec3& p) const { return evaluator().field(p); }
 
 void Tree::field(std::span<const glm::dvec3> points, std::span<double> values) const {
-  if (values.size() != points.size()) throw std::invalid_argument("Tree::field: values.size() != points.size()");
-  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, points.size(), 256), [&](const auto& r) {
-    for (std::size_t i = r.begin(); i != r.end(); ++i) values[i] = field(points[i]);
-  });
+  evaluator().field(points, values);
 }
 
 glm::dvec3 Tree::gradient(const glm::dvec3& p) const {
-  return reference_gradient(*graph_, root_, threshold_, p);
+  glm::dvec3 g;
+  evaluator().gradient(std::span<const glm::dvec3>(&p, 1), {}, std::span<glm::dvec3>(&g, 1));
+  return g;
 }
 
 void Tree::gradient(std::span<const glm::dvec3> points, std::span<glm::dvec3> gradients) const {
+  evaluator().gradient(points, {}, gradients);
+}
+
+double Tree::reference(const glm::dvec3& p) const { return reference_field(*graph_, root_, threshold_, p); }
+
+void Tree::reference(std::span<const glm::dvec3> points, std::span<double> values) const {
+  if (values.size() != points.size()) throw std::invalid_argument("Tree::reference: values.size() != points.size()");
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, points.size(), 256), [&](const auto& r) {
+    for (std::size_t i = r.begin(); i != r.end(); ++i) values[i] = reference(points[i]);
+  });
+}
+
+glm::dvec3 Tree::reference_gradient(const glm::dvec3& p) const {
+  return ht::reference_gradient(*graph_, root_, threshold_, p);
+}
+
+void Tree::reference_gradient(std::span<const glm::dvec3> points, std::span<glm::dvec3> gradients) const {
   if (gradients.size() != points.size())
-    throw std::invalid_argument("Tree::gradient: gradients.size() != points.size()");
+    throw std::invalid_argument("Tree::reference_gradient: gradients.size() != points.size()");
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, points.size(), 64), [&](const auto& r) {
-    for (std::size_t i = r.begin(); i != r.end(); ++i) gradients[i] = gradient(points[i]);
+    for (std::size_t i = r.begin(); i != r.end(); ++i) gradients[i] = reference_gradient(points[i]);
   });
 }
 

@@ -89,7 +89,7 @@ TEST(Cli, InfoDescribesTheScene) {
   const auto r = test::run_cli("info " + s);
   ASSERT_EQ(r.code, 0) << r.err;
   for (const char* needle : {"nodes          5 (depth 3)", "mesh         2", "634 triangles", "tree bytes", "load time",
-                             "support        ["})
+                             "support        [", "tape           6 instructions"})
     EXPECT_NE(r.out.find(needle), std::string::npos) << needle << "\n" << r.out;
   // Loaded once: one mesh line.
   EXPECT_EQ(r.out.find("634 triangles"), r.out.rfind("634 triangles"));
@@ -105,11 +105,16 @@ TEST(Cli, SnakeSceneRoundTripsThroughJson) {
   // The JSON and the builder give the same field.
   Builder b(0.5);
   const Tree t = b.build(scenes::snake(b, 250));
-  const auto e = test::run_cli("eval " + s, "1 0 0.5\n5 0.5 0\n");
-  std::istringstream in(e.out);
-  double f1, f2;
-  in >> f1 >> f2;
-  EXPECT_NEAR(f1, t.field({1, 0, 0.5}), 1e-8 * std::max(1.0, std::abs(f1)));
-  EXPECT_NEAR(f2, t.field({5, 0.5, 0}), 1e-8 * std::max(1.0, std::abs(f2)));
+  for (const char* engine : {"tree", "tape"}) {
+    const auto e = test::run_cli("eval " + s + " --engine " + engine, "1 0 0.5\n5 0.5 0\n");
+    ASSERT_EQ(e.code, 0) << e.err;
+    std::istringstream in(e.out);
+    double f1, f2;
+    in >> f1 >> f2;
+    // 9 significant digits from the tree; float precision from the tape.
+    const double tol = std::string(engine) == "tree" ? 1e-8 : 1e-5;
+    EXPECT_NEAR(f1, t.reference({1, 0, 0.5}), tol * std::max(1.0, std::abs(f1))) << engine;
+    EXPECT_NEAR(f2, t.reference({5, 0.5, 0}), tol * std::max(1.0, std::abs(f2))) << engine;
+  }
   std::filesystem::remove_all(dir);
 }

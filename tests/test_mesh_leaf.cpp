@@ -227,7 +227,7 @@ TEST_P(MeshFieldOnMesh, ThresholdOnSurfaceZeroBeyondRStrengthDeepInside) {
 std::string mesh_test_name(const std::string& file) { return file.substr(0, file.find('.')); }
 
 INSTANTIATE_TEST_SUITE_P(Meshes, MeshFieldOnMesh, ::testing::Values("bunny00.off", "eight.off"),
-                         [](const auto& info) { return mesh_test_name(info.param); });
+                         [](const auto& param_info) { return mesh_test_name(param_info.param); });
 
 TEST(MeshField, MatchesTheFormulaAwayFromTheSurface) {
   // Between the surface and the support: d from the brute-force distance and the winding number.
@@ -289,7 +289,7 @@ INSTANTIATE_TEST_SUITE_P(Meshes, InsideOnMesh,
                          ::testing::Values(std::pair<const char*, std::size_t>{"bunny00.off", 2000},
                                            std::pair<const char*, std::size_t>{"eight.off", 10000},
                                            std::pair<const char*, std::size_t>{"knot2.off", 10000}),
-                         [](const auto& info) { return mesh_test_name(info.param.first); });
+                         [](const auto& param_info) { return mesh_test_name(param_info.param.first); });
 
 TEST(MeshQuery, DistanceMatchesBruteForceWithinRadius) {
   Rng rng = seeded();

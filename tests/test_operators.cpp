@@ -51,14 +51,14 @@ TEST(Operators, BooleanFormulasInEveryMode) {
   const Tree t = p.b.build(bl);
   for (int i = 0; i < 2000; ++i) {
     const dvec3 q = test::random_point(rng, 1.6);
-    const double fa = p.ta.field(q), fb = p.tb.field(q);
-    EXPECT_DOUBLE_EQ(t.subtree(u_mm).field(q), std::max(fa, fb));
-    EXPECT_DOUBLE_EQ(t.subtree(i_mm).field(q), std::min(fa, fb));
-    EXPECT_DOUBLE_EQ(t.subtree(d_mm).field(q), std::max(0.0, std::min(fa, 2 * kT - fb)));
-    EXPECT_NEAR(t.subtree(u_rf).field(q), ru(fa, fb), 1e-12);
-    EXPECT_NEAR(t.subtree(i_rf).field(q), ri(fa, fb), 1e-12);
-    EXPECT_NEAR(t.subtree(d_rf).field(q), std::max(0.0, ri(fa, 2 * kT - fb)), 1e-12);
-    EXPECT_NEAR(t.subtree(bl).field(q), fa + fb, 1e-12);
+    const double fa = p.ta.reference(q), fb = p.tb.reference(q);
+    EXPECT_DOUBLE_EQ(t.subtree(u_mm).reference(q), std::max(fa, fb));
+    EXPECT_DOUBLE_EQ(t.subtree(i_mm).reference(q), std::min(fa, fb));
+    EXPECT_DOUBLE_EQ(t.subtree(d_mm).reference(q), std::max(0.0, std::min(fa, 2 * kT - fb)));
+    EXPECT_NEAR(t.subtree(u_rf).reference(q), ru(fa, fb), 1e-12);
+    EXPECT_NEAR(t.subtree(i_rf).reference(q), ri(fa, fb), 1e-12);
+    EXPECT_NEAR(t.subtree(d_rf).reference(q), std::max(0.0, ri(fa, 2 * kT - fb)), 1e-12);
+    EXPECT_NEAR(t.subtree(bl).reference(q), fa + fb, 1e-12);
   }
 }
 
@@ -87,13 +87,13 @@ TEST(Operators, AutoPicksRFunctionsExactlyUnderABlend) {
   const NodeId boolean_above = p.b.intersect({u, u});  // a Boolean is not a blend
   const Tree t = p.b.build(above);
   const dvec3 q(0.35, 0.05, 0.1);
-  const double fa = p.ta.field(q), fb = p.tb.field(q);
+  const double fa = p.ta.reference(q), fb = p.tb.reference(q);
   ASSERT_GT(std::abs(ru(fa, fb) - std::max(fa, fb)), 1e-3);  // the two rules differ here
-  EXPECT_DOUBLE_EQ(t.subtree(u).field(q), std::max(fa, fb));
-  EXPECT_NEAR(t.subtree(above).field(q), ru(fa, fb), 1e-12);
-  EXPECT_NEAR(t.subtree(lb).field(q), ru(fa, fb), 1e-12);  // region and b are 0 here: union only
-  EXPECT_NEAR(t.subtree(warped_blend).field(q), ru(fa, fb), 1e-12);  // through warps too
-  EXPECT_DOUBLE_EQ(t.subtree(boolean_above).field(q), std::max(fa, fb));
+  EXPECT_DOUBLE_EQ(t.subtree(u).reference(q), std::max(fa, fb));
+  EXPECT_NEAR(t.subtree(above).reference(q), ru(fa, fb), 1e-12);
+  EXPECT_NEAR(t.subtree(lb).reference(q), ru(fa, fb), 1e-12);  // region and b are 0 here: union only
+  EXPECT_NEAR(t.subtree(warped_blend).reference(q), ru(fa, fb), 1e-12);  // through warps too
+  EXPECT_DOUBLE_EQ(t.subtree(boolean_above).reference(q), std::max(fa, fb));
 }
 
 TEST(Operators, LocalBlendWeighsBlendAgainstUnion) {
@@ -105,8 +105,8 @@ TEST(Operators, LocalBlendWeighsBlendAgainstUnion) {
   const Tree tr = t.subtree(region);
   for (int i = 0; i < 2000; ++i) {
     const dvec3 q = test::random_point(rng, 1.6);
-    const double fa = p.ta.field(q), fb = p.tb.field(q), w = std::clamp(tr.field(q), 0.0, 1.0);
-    EXPECT_NEAR(t.field(q), w * (fa + fb) + (1 - w) * std::max(fa, fb), 1e-12);
+    const double fa = p.ta.reference(q), fb = p.tb.reference(q), w = std::clamp(tr.reference(q), 0.0, 1.0);
+    EXPECT_NEAR(t.reference(q), w * (fa + fb) + (1 - w) * std::max(fa, fb), 1e-12);
   }
 }
 
@@ -119,7 +119,7 @@ TEST(Operators, CropIsContinuousZeroWhereTheChildIsZeroAndCutsAtTheBox) {
   const Tree tb = t.subtree(ball);
   for (int i = 0; i < 5000; ++i) {
     const dvec3 q = test::random_point(rng, 1.5);
-    const double f = t.field(q), fc = tb.field(q);
+    const double f = t.reference(q), fc = tb.reference(q);
     if (fc == 0.0) {
       EXPECT_EQ(f, 0.0);
     }
@@ -134,7 +134,7 @@ TEST(Operators, CropIsContinuousZeroWhereTheChildIsZeroAndCutsAtTheBox) {
     }
     // Continuity: a small step changes f by a small amount.
     const dvec3 dq(1e-7, -1e-7, 1e-7);
-    EXPECT_NEAR(t.field(q + dq), f, 1e-5);
+    EXPECT_NEAR(t.reference(q + dq), f, 1e-5);
   }
-  EXPECT_NEAR(t.field({0, 0, 0}), kT, 1e-12);  // on the cut plane, inside the ball
+  EXPECT_NEAR(t.reference({0, 0, 0}), kT, 1e-12);  // on the cut plane, inside the ball
 }

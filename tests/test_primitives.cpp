@@ -174,11 +174,11 @@ TEST(Primitives, FieldAtAnalyticPointsForEveryKind) {
   for (const Probe& pr : probes) {
     const Tree t = whole.subtree(pr.node);
     const std::string kind(kind_name(t.graph().kind[pr.node]));
-    EXPECT_NEAR(t.field(pr.on), F, 1e-12) << kind;
-    EXPECT_NEAR(t.field(pr.on + r0 * pr.dir), kT, 1e-9) << kind;
-    EXPECT_EQ(t.field(pr.on + R * pr.dir), 0.0) << kind;
-    EXPECT_EQ(t.field(pr.on + 1.5 * R * pr.dir), 0.0) << kind;
-    EXPECT_NEAR(t.field(pr.on + 0.5 * R * pr.dir), F * std::pow(0.75, 3), 1e-9) << kind;
+    EXPECT_NEAR(t.reference(pr.on), F, 1e-12) << kind;
+    EXPECT_NEAR(t.reference(pr.on + r0 * pr.dir), kT, 1e-9) << kind;
+    EXPECT_EQ(t.reference(pr.on + R * pr.dir), 0.0) << kind;
+    EXPECT_EQ(t.reference(pr.on + 1.5 * R * pr.dir), 0.0) << kind;
+    EXPECT_NEAR(t.reference(pr.on + 0.5 * R * pr.dir), F * std::pow(0.75, 3), 1e-9) << kind;
   }
 }
 
@@ -186,6 +186,6 @@ TEST(Primitives, NegativeStrengthCarves) {
   Builder b(kT);
   const NodeId carve = b.point({0, 0, 0}, {1.0, -0.8});
   const Tree t = b.build(carve);
-  EXPECT_NEAR(t.field({0, 0, 0}), -0.8, 1e-15);
-  EXPECT_EQ(t.field({1, 0, 0}), 0.0);
+  EXPECT_NEAR(t.reference({0, 0, 0}), -0.8, 1e-15);
+  EXPECT_EQ(t.reference({1, 0, 0}), 0.0);
 }

@@ -155,7 +155,7 @@ TEST(Scene, EveryNodeTypeLoads) {
   EXPECT_EQ(t.mesher_settings().precision, 0.05);
   EXPECT_EQ(t.graph().kind[t.root()], NodeKind::Blend);
   EXPECT_EQ(t.graph().children_of(t.root()).size(), 20u);
-  EXPECT_GT(t.field({0.1, 0.1, 0.1}), 0.0);
+  EXPECT_GT(t.reference({0.1, 0.1, 0.1}), 0.0);
   std::filesystem::remove_all(dir);
 }
 
@@ -164,7 +164,7 @@ TEST(Scene, AffineComposesScaleThenRotateThenTranslate) {
       "translate": [10, 0, 0], "child": {"type": "point", "center": [1, 0, 0], "radius": 1}})");
   const Tree t = load_scene_text(text, ".");
   // The skeleton point (1,0,0) goes to (2,0,0), then (0,2,0), then (10,2,0).
-  EXPECT_NEAR(t.field({10, 2, 0}), 1.0, 1e-12);
+  EXPECT_NEAR(t.reference({10, 2, 0}), 1.0, 1e-12);
 }
 
 TEST(Scene, SameMeshNamedTwiceIsLoadedOnce) {
@@ -186,5 +186,5 @@ TEST(Scene, FfdIsParsedButItsFieldWaitsForMeshing) {
   const std::string text = scene(R"({"type": "ffd", "min": [0,0,0], "max": [1,1,1], "dims": [1,1,1], "radius": 0.1,
       "points": [)" + pts + R"(], "child": {"type": "point", "center": [0,0,0], "radius": 1}})");
   const Tree t = load_scene_text(text, ".");
-  EXPECT_THROW(t.field({0, 0, 0}), EvalError);
+  EXPECT_THROW(t.reference({0, 0, 0}), EvalError);
 }

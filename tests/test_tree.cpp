@@ -50,7 +50,7 @@ TEST(Tree, GradientMatchesTheAnalyticGradientOfAPrimitive) {
     // f = F (1 - d^2/R^2)^3  =>  grad f = -6 F (1 - d^2/R^2)^2 q / R^2
     const double u = 1 - d2 / (R * R);
     const dvec3 expected = d2 < R * R ? -6.0 * F * u * u * q / (R * R) : dvec3(0.0);
-    const dvec3 got = t.gradient(p);
+    const dvec3 got = t.reference_gradient(p);
     EXPECT_NEAR(glm::length(got - expected), 0.0, 1e-6) << i;
   }
 }
@@ -63,14 +63,14 @@ TEST(Tree, BatchQueriesEqualPointQueries) {
   for (int i = 0; i < 4000; ++i) pts.push_back(test::random_point(rng, 2.5));
   std::vector<double> values(pts.size());
   std::vector<dvec3> grads(pts.size());
-  t.field(pts, values);
-  t.gradient(pts, grads);
+  t.reference(pts, values);
+  t.reference_gradient(pts, grads);
   for (std::size_t i = 0; i < pts.size(); ++i) {
-    EXPECT_EQ(values[i], t.field(pts[i]));
-    EXPECT_EQ(grads[i], t.gradient(pts[i]));
+    EXPECT_EQ(values[i], t.reference(pts[i]));
+    EXPECT_EQ(grads[i], t.reference_gradient(pts[i]));
   }
   std::vector<double> wrong(3);
-  EXPECT_THROW(t.field(pts, wrong), std::invalid_argument);
+  EXPECT_THROW(t.reference(pts, wrong), std::invalid_argument);
 }
 
 TEST(Tree, TwoHundredFiftyPrimitivesFitInUnder64KB) {

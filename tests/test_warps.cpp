@@ -126,7 +126,7 @@ TEST(Warps, WarpedFieldIsTheChildAtTheInverse) {
     const auto prm = t.graph().params_of(w);
     for (int i = 0; i < 500; ++i) {
       const dvec3 p = test::random_point(rng, 1.5);
-      EXPECT_DOUBLE_EQ(t.subtree(w).field(p), t.subtree(child).field(warp_inverse(t.graph().kind[w], prm.data(), p)));
+      EXPECT_DOUBLE_EQ(t.subtree(w).reference(p), t.subtree(child).reference(warp_inverse(t.graph().kind[w], prm.data(), p)));
     }
   }
 }

@@ -5,6 +5,8 @@
 // Exit codes: 0 success, 2 bad input (scene, points, arguments), 1 anything else.
 #include "nodes/mesh_leaf.hpp"
 #include "runtime/scene.hpp"
+#include "runtime/tape.hpp"
+#include "runtime/tape_eval.hpp"
 #include "runtime/tree_eval.hpp"
 #include "tools/scenes.hpp"
 
@@ -116,13 +118,28 @@ int cmd_info(const std::string& scene) {
   std::printf("tree bytes     %zu (the model: kinds, parameters, children, names)\n", g.bytes());
   std::printf("derived bytes  %zu (support boxes, curve polylines)\n", g.derived_bytes());
   if (!g.meshes.empty()) std::printf("mesh bytes     %zu (shared, loaded once per file)\n", mesh_bytes);
+  try {
+    const auto t1 = std::chrono::steady_clock::now();
+    const ht::Tape tape = ht::compile_tape(tree.graph_ptr(), tree.root(), tree.threshold());
+    const double compile_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
+    std::printf("tape           %zu instructions, %u scalar registers, %u frames, %zu bytes (compiled in %.3f s)\n",
+                tape.size(), tape.scalar_registers, tape.frames, tape.bytes(), compile_s);
+  } catch (const ht::CompileError& e) {
+    std::printf("tape           not compiled: %s\n", e.what());
+  }
   std::printf("load time      %.3f s\n", load_s);
   return 0;
 }
 
 int cmd_eval(const std::string& scene, const std::string& points_file, bool gradient, const std::string& engine) {
-  if (engine != "tree") throw InputError("--engine " + engine + ": only the tree engine exists yet");
   const ht::Tree tree = ht::load_scene(scene);
+  if (engine == "tape") {
+    try {
+      tree.evaluator();
+    } catch (const ht::CompileError& e) {
+      throw InputError(scene + ": " + e.what());
+    }
+  }
   std::vector<glm::dvec3> points;
   if (points_file.empty() || points_file == "-") {
     points = read_points(std::cin, "<stdin>");
@@ -132,11 +149,16 @@ int cmd_eval(const std::string& scene, const std::string& points_file, bool grad
     points = read_points(in, points_file);
   }
   std::vector<double> values(points.size());
-  tree.field(points, values);
   std::vector<glm::dvec3> grads;
-  if (gradient) {
-    grads.resize(points.size());
-    tree.gradient(points, grads);
+  if (gradient) grads.resize(points.size());
+  if (engine == "tape") {
+    if (gradient)
+      tree.evaluator().gradient(points, values, grads);
+    else
+      tree.field(points, values);
+  } else {
+    tree.reference(points, values);
+    if (gradient) tree.reference_gradient(points, grads);
   }
   std::string out;
   char buf[160];
@@ -156,7 +178,7 @@ int cmd_eval(const std::string& scene, const std::string& points_file, bool grad
 int main(int argc, char** argv) {
   CLI::App app{"HybridTree: a hybrid implicit/mesh modeling kernel (Allegre et al. 2004)"};
   app.require_subcommand(1);
-  std::string scene, points_file, engine = "tree";
+  std::string scene, points_file, engine = "tape";
   bool gradient = false;
 
   auto* info = app.add_subcommand("info", "Print what a scene holds: nodes, depth, bounds, meshes, bytes, load time");
@@ -166,7 +188,8 @@ int main(int argc, char** argv) {
   eval->add_option("scene", scene, "Scene file (JSON, SCENE_FORMAT v1)")->required();
   eval->add_option("--points", points_file, "Points file (default: stdin)");
   eval->add_flag("--gradient", gradient, "Also print the gradient (three more columns)");
-  eval->add_option("--engine", engine, "Evaluator: tree (the reference evaluator)")->check(CLI::IsMember({"tree"}));
+  eval->add_option("--engine", engine, "Evaluator: tape (compiled, float, SIMD; default) or tree (reference, double)")
+      ->check(CLI::IsMember({"tape", "tree"}));
 
   int count = 250;
   std::uint64_t seed = 1;

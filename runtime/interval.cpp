@@ -1,0 +1,155 @@
+// Interval analysis: a conservative range of a node's field over a box. Every rule follows the
+// monotonicity of a formula in SCENE_FORMAT.md; the tape compiler prunes on these ranges, and
+// tests/test_tape.cpp checks them against sampled values.
+#include "nodes/mesh_leaf.hpp"
+#include "nodes/operators.hpp"
+#include "nodes/primitives.hpp"
+#include "nodes/warps.hpp"
+#include "runtime/tape.hpp"
+
+#include <glm/geometric.hpp>
+
+#include <algorithm>
+#include <cmath>
+
+namespace ht {
+namespace {
+
+Interval hull(double a, double b) { return {std::min(a, b), std::max(a, b)}; }
+
+double box_gap(const Aabb& a, const Aabb& b) {
+  const glm::dvec3 gap = glm::max(glm::max(a.lo - b.hi, b.lo - a.hi), glm::dvec3(0.0));
+  return glm::length(gap);
+}
+
+// g over a distance range [dmin, dmax]: g decreases with d for F > 0.
+Interval falloff_range(double dmin, double dmax, double R, double F) {
+  return hull(falloff(dmin, R, F), falloff(dmax, R, F));
+}
+
+Interval either_sign(double F) { return {std::min(0.0, F), std::max(0.0, F)}; }
+
+Interval primitive_interval(const Graph& g, NodeId n, const Aabb& box) {
+  const auto p = g.params_of(n);
+  const double R = p[kPrimR], F = p[kPrimF];
+  if (ht::intersect(box, g.support_alone[n]).empty()) return {};
+  if (!box.finite()) return either_sign(F);
+  const double half = 0.5 * glm::length(box.size());
+  const double at_centre = skeleton_distance(g.kind[n], g.skeleton_of(n), box.center());
+  // Distance to a set is 1-Lipschitz; the skeleton's box gives a second lower bound.
+  const double dmin = std::max({0.0, at_centre - half, box_gap(box, skeleton_bounds(g.kind[n], g.skeleton_of(n)))});
+  return falloff_range(dmin, at_centre + half, R, F);
+}
+
+Interval mesh_interval(const Graph& g, NodeId n, double T, const Aabb& box) {
+  const auto p = g.params_of(n);
+  const double F = p[1], kernel = p[2], r0 = p[3], reach = p[4];
+  if (ht::intersect(box, g.support_alone[n]).empty()) return {};
+  if (!box.finite()) return either_sign(F);
+  const MeshLeaf& mesh = *g.meshes[g.mesh[n]];
+  const double half = 0.5 * glm::length(box.size());
+  const MeshLeaf::Closest c = mesh.query(box.center(), half + reach);
+  if (!std::isfinite(c.distance)) return c.inside ? Interval{F, F} : Interval{};
+  if (c.distance <= half) return either_sign(F);  // the surface crosses the box
+  // The whole box is on the centre's side; pseudo-distance ranges follow dM +- half.
+  const double dlo = c.distance - half, dhi = c.distance + half;
+  auto field_at = [&](double pseudo) { return falloff(pseudo, kernel, F); };
+  (void)T;
+  if (c.inside) return hull(field_at(std::max(0.0, r0 - dhi)), field_at(std::max(0.0, r0 - dlo)));
+  return hull(field_at(dlo + r0), field_at(dhi + r0));
+}
+
+// The region of a warp's child: where the child is asked, w^-1(box).
+bool child_region(const Graph& g, NodeId n, const Aabb& box, Aabb& out) {
+  const auto p = g.params_of(n);
+  switch (g.kind[n]) {
+    case NodeKind::Affine: out = warp_bounds(NodeKind::Affine, p.data() + 12, box); return true;
+    case NodeKind::Twist: {
+      double q[kTwistParams];
+      std::copy(p.begin(), p.end(), q);
+      q[4] = -q[4];
+      out = warp_bounds(NodeKind::Twist, q, box);
+      return true;
+    }
+    case NodeKind::Taper: {
+      double q[kTaperParams];
+      std::copy(p.begin(), p.end(), q);
+      q[6] = 1.0 / p[6];
+      q[7] = 1.0 / p[7];
+      out = warp_bounds(NodeKind::Taper, q, box);
+      return true;
+    }
+    default: return false;  // bend: no bound of its inverse yet, so no pruning below it
+  }
+}
+
+}  // namespace
+
+Interval field_interval(const Graph& g, NodeId n, double T, const Aabb& box, bool under_blend) {
+  const auto c = g.children_of(n);
+  const bool rf = use_rfunction(g.boolean[n], under_blend);
+  auto child = [&](std::size_t i, bool blended) { return field_interval(g, c[i], T, box, blended); };
+  switch (g.kind[n]) {
+    case NodeKind::Mesh: return mesh_interval(g, n, T, box);
+    case NodeKind::Blend: {
+      Interval sum;
+      for (std::size_t i = 0; i < c.size(); ++i) {
+        const Interval v = child(i, true);
+        sum = {sum.lo + v.lo, sum.hi + v.hi};
+      }
+      return sum;
+    }
+    case NodeKind::Union:
+    case NodeKind::Intersection:
+    case NodeKind::Difference: {
+      Interval acc = child(0, under_blend);
+      for (std::size_t i = 1; i < c.size(); ++i) {
+        const Interval b = child(i, under_blend);
+        // Union and intersection rise with both operands, difference rises with A, falls with B.
+        if (g.kind[n] == NodeKind::Union)
+          acc = {union_field(acc.lo, b.lo, T, rf), union_field(acc.hi, b.hi, T, rf)};
+        else if (g.kind[n] == NodeKind::Intersection)
+          acc = {intersection_field(acc.lo, b.lo, T, rf), intersection_field(acc.hi, b.hi, T, rf)};
+        else
+          acc = {difference_field(acc.lo, b.hi, T, rf), difference_field(acc.hi, b.lo, T, rf)};
+      }
+      return acc;
+    }
+    case NodeKind::LocalBlend: {
+      const Interval a = child(0, true), b = child(1, true), r = child(2, true);
+      const Interval sum{a.lo + b.lo, a.hi + b.hi};
+      const Interval uni{union_field(a.lo, b.lo, T, rf), union_field(a.hi, b.hi, T, rf)};
+      const double wlo = std::clamp(r.lo, 0.0, 1.0), whi = std::clamp(r.hi, 0.0, 1.0);
+      // f = U + w (S - U), linear in w: its range is the hull at both ends of w.
+      const Interval diff{sum.lo - uni.hi, sum.hi - uni.lo};
+      const Interval lo_end{uni.lo + std::min(wlo * diff.lo, whi * diff.lo), uni.hi + std::max(wlo * diff.hi, whi * diff.hi)};
+      return lo_end;
+    }
+    case NodeKind::Crop: {
+      const Interval v = child(0, under_blend);
+      if (!box.finite()) return {std::max(0.0, std::min(v.lo, 0.0)), std::max(0.0, v.hi)};
+      const double half = 0.5 * glm::length(box.size());
+      const double h = crop_box_field(g.params_of(n).data(), T, box.center());
+      const double slope = T / crop_reach(g.params_of(n).data());  // h is slope-Lipschitz
+      return {std::max(0.0, std::min(v.lo, h - slope * half)), std::max(0.0, std::min(v.hi, h + slope * half))};
+    }
+    case NodeKind::Affine:
+    case NodeKind::Twist:
+    case NodeKind::Taper:
+    case NodeKind::Bend: {
+      Aabb local;
+      if (!child_region(g, n, box, local)) local = Aabb::everything();
+      return field_interval(g, c[0], T, local, under_blend);
+    }
+    case NodeKind::Ffd: {
+      const double F = g.params_of(n)[10];
+      return either_sign(F);
+    }
+    default: return primitive_interval(g, n, box);
+  }
+}
+
+// Exposed for the compiler: the box a warp's child sees, or false when unknown.
+bool warp_child_region(const Graph& g, NodeId n, const Aabb& box, Aabb& out) { return child_region(g, n, box, out); }
+
+}  // namespace ht

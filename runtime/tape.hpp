@@ -1,0 +1,116 @@
+// The tape: a HybridTree node compiled into a flat list of instructions over numbered
+// registers, evaluated in float over structure-of-arrays blocks of points.
+//
+//   Graph --compile(node, region?)--> Tape --TapeEvaluator--> values / gradients
+//
+// Registers come in two files. A scalar register holds one field value per lane; a frame holds
+// three rows (x, y, z) of coordinates. Frame 0 is the query points; a warp writes a new frame
+// for its subtree, so coordinates are registers too and the hot loop never walks the tree.
+// Each instruction is a tight loop over the lanes of a block (the compiler vectorizes the float
+// loops; the evaluator is built for AVX-512, AVX2 and baseline x86-64 and picks at run time).
+//
+// Compilation is a post-order walk with register reuse: a value's register is freed when its
+// consumer is emitted, so the registers in use grow with the tree's depth, not its size, and a
+// block's working set stays in L1. The `auto` Boolean rule is resolved here, per path.
+//
+// With a region (an axis-aligned box), compilation specializes: interval analysis over the box
+// removes every node whose field is 0 there, every blend term that is 0 there and every
+// min/max branch decided there, so the tape is shorter and gives the same values inside the
+// box. This is the paper's bounding-box hierarchy (section 4), made data-oriented.
+#pragma once
+
+#include "runtime/aabb.hpp"
+#include "runtime/graph.hpp"
+
+#include <cstdint>
+#include <memory>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+namespace ht {
+
+// X(opcode, what it computes)
+#define HT_TAPE_OPS(X)                                                   \
+  X(Point, "s[out] = g(distance to a point, in frame a)")                \
+  X(Segment, "s[out] = g(distance to a segment)")                       \
+  X(Circle, "s[out] = g(distance to a circle)")                         \
+  X(Disc, "s[out] = g(distance to a disc)")                             \
+  X(Triangle, "s[out] = g(distance to a triangle)")                     \
+  X(Curve, "s[out] = g(distance to a polyline)")                        \
+  X(Box, "s[out] = g(distance to a solid box)")                         \
+  X(Cylinder, "s[out] = g(distance to a solid capped cylinder)")        \
+  X(ConeSphere, "s[out] = g(distance to the hull of two spheres)")      \
+  X(Mesh, "s[out] = pseudo-distance field of mesh k (Embree)")         \
+  X(Zero, "s[out] = 0")                                                 \
+  X(Add, "s[out] = s[a] + s[b]")                                        \
+  X(Max, "s[out] = max(s[a], s[b])")                                    \
+  X(Min, "s[out] = min(s[a], s[b])")                                    \
+  X(RUnion, "s[out] = R-function union of s[a], s[b]")                  \
+  X(RIntersection, "s[out] = R-function intersection of s[a], s[b]")    \
+  X(DiffMinMax, "s[out] = max(0, min(s[a], 2T - s[b]))")                \
+  X(DiffRFunction, "s[out] = max(0, R-intersection(s[a], 2T - s[b]))")  \
+  X(LocalBlendMinMax, "s[out] = w(s[a]+s[b]) + (1-w) max(s[a],s[b])")   \
+  X(LocalBlendRFunction, "s[out] = w(s[a]+s[b]) + (1-w) R-union")       \
+  X(Crop, "s[out] = max(0, min(s[b], h(frame a)))")                     \
+  X(Affine, "frame out = inverse affine map of frame a")                \
+  X(Twist, "frame out = inverse twist of frame a")                      \
+  X(Taper, "frame out = inverse taper of frame a")                      \
+  X(Bend, "frame out = inverse bend of frame a")
+
+enum class OpCode : std::uint8_t {
+#define HT_X(name, doc) name,
+  HT_TAPE_OPS(HT_X)
+#undef HT_X
+};
+
+const char* op_name(OpCode op);
+
+/// One instruction: 16 bytes. `out`, `a`, `b`, `c` are scalar registers or frames as the
+/// opcode says; `k` indexes the constant pool (or, for Mesh, the tape's mesh table).
+struct Instruction {
+  OpCode op;
+  std::uint8_t unused = 0;
+  std::uint16_t out = 0, a = 0, b = 0, c = 0;
+  std::uint32_t k = 0;
+};
+static_assert(sizeof(Instruction) == 12 || sizeof(Instruction) == 16);
+
+/// Thrown when a node cannot be compiled (an ffd before meshing exists, a tree too deep).
+struct CompileError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+struct Tape {
+  std::vector<Instruction> code;
+  std::vector<float> constants;
+  std::vector<const MeshLeaf*> meshes;  ///< kept alive by `graph`
+  std::shared_ptr<const Graph> graph;   ///< the graph the tape came from
+  std::uint16_t scalar_registers = 0;   ///< scalar registers used
+  std::uint16_t frames = 1;             ///< frames used (frame 0 is the input)
+  std::uint16_t result = 0;             ///< the scalar register holding the root's value
+  float threshold = 0.5f;
+
+  std::size_t size() const { return code.size(); }
+  std::size_t bytes() const {
+    return code.size() * sizeof(Instruction) + constants.size() * sizeof(float) + meshes.size() * sizeof(void*);
+  }
+  /// Number of instructions of each primitive or mesh kind (for statistics and tests).
+  std::size_t leaf_count() const;
+  /// One line per instruction, for debugging and `hybridtree info --tape`.
+  std::string listing() const;
+};
+
+/// Compiles `root` (a root on its own: `auto` picks min/max there). With `region`, the tape is
+/// specialized to that box: shorter, and equal to the full tape inside it.
+Tape compile_tape(std::shared_ptr<const Graph> graph, NodeId root, double threshold, const Aabb* region = nullptr);
+
+/// A conservative range of a node's field over a box (interval analysis; the compiler's pruning
+/// rules rest on it). `under_blend` as in reference_field.
+struct Interval {
+  double lo = 0.0, hi = 0.0;
+  bool zero() const { return lo == 0.0 && hi == 0.0; }
+};
+Interval field_interval(const Graph& graph, NodeId node, double threshold, const Aabb& box, bool under_blend);
+
+}  // namespace ht

@@ -1,0 +1,412 @@
+// The tape compiler: a post-order walk that emits one instruction per surviving node, frees each
+// value's register when its consumer is emitted, and (with a region) drops what interval analysis
+// proves irrelevant inside the region. See runtime/tape.hpp.
+#include "nodes/mesh_leaf.hpp"
+#include "nodes/operators.hpp"
+#include "nodes/primitives.hpp"
+#include "nodes/warps.hpp"
+#include "runtime/tape.hpp"
+
+#include <glm/geometric.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <limits>
+
+namespace ht {
+
+bool warp_child_region(const Graph& g, NodeId n, const Aabb& box, Aabb& out);  // runtime/interval.cpp
+
+namespace {
+
+constexpr int kNoValue = -1;  // the node is 0 everywhere that matters: no code, no register
+constexpr int kMaxDepth = kMaxTreeDepth;
+
+class Compiler {
+ public:
+  Compiler(const Graph& g, double T, Tape& tape) : g_(g), T_(T), tape_(tape) {}
+
+  // Emits code for node n reading frame `frame`; returns its scalar register or kNoValue.
+  // `region` is the box of interest in this frame's coordinates, or null for everywhere.
+  int node(NodeId n, int frame, bool under_blend, const Aabb* region, int depth) {
+    if (depth > kMaxDepth) throw CompileError("the tree is deeper than " + std::to_string(kMaxDepth) + " nodes");
+    if (region && field_interval(g_, n, T_, *region, under_blend).zero()) return kNoValue;
+    const NodeKind k = g_.kind[n];
+    switch (kind_family(k)) {
+      case Family::Primitive: return primitive(n, frame);
+      case Family::Mesh: return mesh(n, frame);
+      case Family::Warp: return warp(n, frame, under_blend, region, depth);
+      case Family::Operator: break;
+    }
+    switch (k) {
+      case NodeKind::Blend: return blend(n, frame, region, depth);
+      case NodeKind::Union:
+      case NodeKind::Intersection: return min_max(n, frame, under_blend, region, depth);
+      case NodeKind::Difference: return difference(n, frame, under_blend, region, depth);
+      case NodeKind::LocalBlend: return local_blend(n, frame, under_blend, region, depth);
+      default: return crop(n, frame, under_blend, region, depth);
+    }
+  }
+
+  std::uint16_t scalar_count() const { return scalar_high_; }
+  std::uint16_t frame_count() const { return frame_high_; }
+
+  int materialize(int reg) {
+    if (reg != kNoValue) return reg;
+    const int out = alloc_scalar();
+    emit(OpCode::Zero, out, 0, 0, 0, 0);
+    return out;
+  }
+
+ private:
+  // -- registers --------------------------------------------------------------------------
+  int alloc_scalar() {
+    if (!free_scalars_.empty()) {
+      const int r = free_scalars_.back();
+      free_scalars_.pop_back();
+      return r;
+    }
+    if (scalar_high_ == std::numeric_limits<std::uint16_t>::max()) throw CompileError("too many registers");
+    return scalar_high_++;
+  }
+  void release_scalar(int r) {
+    if (r != kNoValue) free_scalars_.push_back(r);
+  }
+  int alloc_frame() {
+    if (!free_frames_.empty()) {
+      const int f = free_frames_.back();
+      free_frames_.pop_back();
+      return f;
+    }
+    return frame_high_++;
+  }
+  void release_frame(int f) { free_frames_.push_back(f); }
+
+  std::uint32_t constants(std::initializer_list<double> values) {
+    const auto at = static_cast<std::uint32_t>(tape_.constants.size());
+    for (double v : values) tape_.constants.push_back(static_cast<float>(v));
+    return at;
+  }
+  void emit(OpCode op, int out, int a, int b, int c, std::uint32_t k) {
+    Instruction ins;
+    ins.op = op;
+    ins.out = static_cast<std::uint16_t>(out);
+    ins.a = static_cast<std::uint16_t>(a);
+    ins.b = static_cast<std::uint16_t>(b);
+    ins.c = static_cast<std::uint16_t>(c);
+    ins.k = k;
+    tape_.code.push_back(ins);
+  }
+
+  // -- leaves -----------------------------------------------------------------------------
+  int primitive(NodeId n, int frame) {
+    const auto p = g_.params_of(n);
+    const double R = p[kPrimR], F = p[kPrimF];
+    const double* s = g_.skeleton_of(n);
+    // Common header: R^2, 1/R^2, F, R; the skeleton follows (layouts in runtime/tape_ops.hpp).
+    const std::uint32_t k = constants({R * R, 1.0 / (R * R), F, R});
+    auto v = [&](int i) { return glm::dvec3(s[i], s[i + 1], s[i + 2]); };
+    auto push3 = [&](const glm::dvec3& q) { constants({q.x, q.y, q.z}); };
+    OpCode op = OpCode::Point;
+    switch (g_.kind[n]) {
+      case NodeKind::Point: push3(v(0)); op = OpCode::Point; break;
+      case NodeKind::Segment: {
+        const glm::dvec3 a = v(0), ab = v(3) - v(0);
+        const double len2 = glm::dot(ab, ab);
+        push3(a);
+        push3(ab);
+        constants({len2 > 0 ? 1.0 / len2 : 0.0});
+        op = OpCode::Segment;
+        break;
+      }
+      case NodeKind::Circle:
+      case NodeKind::Disc:
+        push3(v(0));
+        push3(v(3));
+        constants({s[6]});
+        op = g_.kind[n] == NodeKind::Circle ? OpCode::Circle : OpCode::Disc;
+        break;
+      case NodeKind::Triangle: {
+        const glm::dvec3 a = v(0), b = v(3), c = v(6);
+        const glm::dvec3 ba = b - a, cb = c - b, ac = a - c, nor = glm::cross(ba, ac);
+        auto inv = [](double x) { return x > 0 ? 1.0 / x : 0.0; };
+        push3(a);
+        push3(b);
+        push3(c);
+        push3(ba);
+        push3(cb);
+        push3(ac);
+        push3(glm::cross(ba, nor));
+        push3(glm::cross(cb, nor));
+        push3(glm::cross(ac, nor));
+        push3(nor);
+        constants({inv(glm::dot(ba, ba)), inv(glm::dot(cb, cb)), inv(glm::dot(ac, ac)), inv(glm::dot(nor, nor))});
+        op = OpCode::Triangle;
+        break;
+      }
+      case NodeKind::Curve: {
+        const auto count = static_cast<std::size_t>(s[0]);
+        constants({static_cast<double>(count > 1 ? count - 1 : 1)});
+        for (std::size_t i = 0; i + 1 < std::max<std::size_t>(count, 2); ++i) {
+          const glm::dvec3 a = v(1 + 3 * static_cast<int>(i));
+          const glm::dvec3 b = count > 1 ? v(1 + 3 * static_cast<int>(i + 1)) : a;
+          const glm::dvec3 ab = b - a;
+          const double len2 = glm::dot(ab, ab);
+          push3(a);
+          push3(ab);
+          constants({len2 > 0 ? 1.0 / len2 : 0.0});
+        }
+        op = OpCode::Curve;
+        break;
+      }
+      case NodeKind::Box:
+        push3(0.5 * (v(0) + v(3)));
+        push3(0.5 * (v(3) - v(0)));
+        op = OpCode::Box;
+        break;
+      case NodeKind::Cylinder: {
+        const glm::dvec3 a = v(0), axis = v(3) - v(0);
+        const double len = glm::length(axis);
+        push3(a);
+        push3(axis / len);
+        constants({len, s[6]});
+        op = OpCode::Cylinder;
+        break;
+      }
+      default: {  // cone_sphere
+        const glm::dvec3 a = v(0), b = v(3);
+        const double ra = s[6], rb = s[7], len = glm::length(b - a);
+        if (len <= std::abs(ra - rb)) {  // one sphere holds the other: flag 1, the big sphere
+          const bool a_big = ra >= rb;
+          push3(a_big ? a : b);
+          constants({0, 0, 0, 0, a_big ? ra : rb, 0, 0, 0, 1});
+        } else {
+          const double sn = (ra - rb) / len;
+          push3(a);
+          push3((b - a) / len);
+          constants({len, ra, rb, sn, std::sqrt(1 - sn * sn), 0});
+        }
+        op = OpCode::ConeSphere;
+        break;
+      }
+    }
+    const int out = alloc_scalar();
+    emit(op, out, frame, 0, 0, k);
+    return out;
+  }
+
+  int mesh(NodeId n, int frame) {
+    const auto p = g_.params_of(n);
+    const MeshLeaf* leaf = g_.meshes[g_.mesh[n]].get();
+    auto it = std::find(tape_.meshes.begin(), tape_.meshes.end(), leaf);
+    const auto index = static_cast<int>(it - tape_.meshes.begin());
+    if (it == tape_.meshes.end()) tape_.meshes.push_back(leaf);
+    // F, kernel radius R', r0, query radius.
+    const std::uint32_t k = constants({p[1], p[2], p[3], p[4]});
+    const int out = alloc_scalar();
+    emit(OpCode::Mesh, out, frame, index, 0, k);
+    return out;
+  }
+
+  // -- warps ------------------------------------------------------------------------------
+  int warp(NodeId n, int frame, bool under_blend, const Aabb* region, int depth) {
+    const NodeKind k = g_.kind[n];
+    if (k == NodeKind::Ffd)
+      throw CompileError("ffd node " + g_.label(n) + ": its field is the distance to its deformed mesh, which needs meshing");
+    const auto p = g_.params_of(n);
+    std::uint32_t at = 0;
+    OpCode op = OpCode::Affine;
+    switch (k) {
+      case NodeKind::Affine:
+        at = static_cast<std::uint32_t>(tape_.constants.size());
+        for (int i = 12; i < 24; ++i) tape_.constants.push_back(static_cast<float>(p[i]));
+        op = OpCode::Affine;
+        break;
+      case NodeKind::Twist: at = constants({p[0], p[1], p[2], p[3], p[4]}); op = OpCode::Twist; break;
+      case NodeKind::Taper: at = constants({p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7]}); op = OpCode::Taper; break;
+      default: at = constants({p[0], p[1], p[2], p[3], p[4], p[5], p[6]}); op = OpCode::Bend; break;
+    }
+    const int inner = alloc_frame();
+    const std::size_t mark = tape_.code.size();
+    emit(op, inner, frame, 0, 0, at);
+    Aabb local;
+    const bool known = region && warp_child_region(g_, n, *region, local);
+    const int r = node(g_.children_of(n)[0], inner, under_blend, known ? &local : nullptr, depth + 1);
+    release_frame(inner);
+    if (r == kNoValue) tape_.code.resize(mark);  // the child vanished: so does the warp
+    return r;
+  }
+
+  // -- operators --------------------------------------------------------------------------
+  int blend(NodeId n, int frame, const Aabb* region, int depth) {
+    int acc = kNoValue;
+    for (NodeId c : g_.children_of(n)) {
+      const int r = node(c, frame, true, region, depth + 1);
+      if (r == kNoValue) continue;  // a blend term that is 0 here
+      if (acc == kNoValue) {
+        acc = r;
+        continue;
+      }
+      emit(OpCode::Add, acc, acc, r, 0, 0);
+      release_scalar(r);
+    }
+    return acc;
+  }
+
+  // Union and intersection. With min/max and a region, children whose interval lies entirely
+  // below (union) or above (intersection) another surviving child's cannot win anywhere in the
+  // region: they are dropped. R-functions keep every child (zero ones become Zero).
+  int min_max(NodeId n, int frame, bool under_blend, const Aabb* region, int depth) {
+    const bool rf = use_rfunction(g_.boolean[n], under_blend);
+    const bool is_union = g_.kind[n] == NodeKind::Union;
+    const auto c = g_.children_of(n);
+    std::vector<std::uint8_t> keep(c.size(), 1);
+    if (region && !rf) {
+      std::vector<Interval> iv(c.size());
+      for (std::size_t i = 0; i < c.size(); ++i) iv[i] = field_interval(g_, c[i], T_, *region, under_blend);
+      for (std::size_t i = 0; i < c.size(); ++i)
+        for (std::size_t j = 0; j < c.size(); ++j) {
+          if (i == j || !keep[j]) continue;
+          const bool dominated = is_union ? iv[j].lo >= iv[i].hi : iv[j].hi <= iv[i].lo;
+          if (dominated) {
+            keep[i] = 0;
+            break;
+          }
+        }
+    }
+    int acc = kNoValue;
+    bool first = true;
+    const OpCode op = rf ? (is_union ? OpCode::RUnion : OpCode::RIntersection) : (is_union ? OpCode::Max : OpCode::Min);
+    for (std::size_t i = 0; i < c.size(); ++i) {
+      if (!keep[i]) continue;
+      int r = node(c[i], frame, under_blend, region, depth + 1);
+      if (first) {
+        acc = r;
+        first = false;
+        continue;
+      }
+      if (!rf && r == kNoValue && acc == kNoValue) continue;
+      acc = materialize(acc);
+      r = materialize(r);
+      emit(op, acc, acc, r, 0, 0);
+      release_scalar(r);
+    }
+    return acc;
+  }
+
+  int difference(NodeId n, int frame, bool under_blend, const Aabb* region, int depth) {
+    const bool rf = use_rfunction(g_.boolean[n], under_blend);
+    const auto c = g_.children_of(n);
+    int acc = node(c[0], frame, under_blend, region, depth + 1);
+    if (c.size() == 1) return acc;
+    Interval acc_iv = region ? field_interval(g_, c[0], T_, *region, under_blend) : Interval{-1e300, 1e300};
+    for (std::size_t i = 1; i < c.size(); ++i) {
+      const Interval b_iv = region ? field_interval(g_, c[i], T_, *region, under_blend) : Interval{-1e300, 1e300};
+      // With min/max, max(0, min(A, 2T - B)) is A itself where 0 <= A <= 2T - B.
+      if (!rf && region && acc_iv.lo >= 0.0 && acc_iv.hi <= 2.0 * T_ - b_iv.hi) continue;
+      if (!rf && acc == kNoValue) continue;  // max(0, min(0, x)) = 0
+      int r = node(c[i], frame, under_blend, region, depth + 1);
+      acc = materialize(acc);
+      r = materialize(r);
+      emit(rf ? OpCode::DiffRFunction : OpCode::DiffMinMax, acc, acc, r, 0, 0);
+      release_scalar(r);
+      acc_iv = {difference_field(acc_iv.lo, b_iv.hi, T_, rf), difference_field(acc_iv.hi, b_iv.lo, T_, rf)};
+    }
+    return acc;
+  }
+
+  int local_blend(NodeId n, int frame, bool under_blend, const Aabb* region, int depth) {
+    const bool rf = use_rfunction(g_.boolean[n], under_blend);
+    const auto c = g_.children_of(n);
+    if (region) {
+      const Interval w = field_interval(g_, c[2], T_, *region, true);
+      if (w.hi <= 0.0) {  // no blending here: the union alone
+        const int a = materialize(node(c[0], frame, true, region, depth + 1));
+        const int b = materialize(node(c[1], frame, true, region, depth + 1));
+        emit(rf ? OpCode::RUnion : OpCode::Max, a, a, b, 0, 0);
+        release_scalar(b);
+        return a;
+      }
+      if (w.lo >= 1.0) {  // full blending here: the sum alone
+        const int a = node(c[0], frame, true, region, depth + 1);
+        const int b = node(c[1], frame, true, region, depth + 1);
+        if (a == kNoValue) return b;
+        if (b == kNoValue) return a;
+        emit(OpCode::Add, a, a, b, 0, 0);
+        release_scalar(b);
+        return a;
+      }
+    }
+    const int a = materialize(node(c[0], frame, true, region, depth + 1));
+    const int b = materialize(node(c[1], frame, true, region, depth + 1));
+    const int r = materialize(node(c[2], frame, true, region, depth + 1));
+    emit(rf ? OpCode::LocalBlendRFunction : OpCode::LocalBlendMinMax, a, a, b, r, 0);
+    release_scalar(b);
+    release_scalar(r);
+    return a;
+  }
+
+  int crop(NodeId n, int frame, bool under_blend, const Aabb* region, int depth) {
+    const auto p = g_.params_of(n);
+    const int child = node(g_.children_of(n)[0], frame, under_blend, region, depth + 1);
+    if (child == kNoValue) return kNoValue;
+    const glm::dvec3 lo(p[0], p[1], p[2]), hi(p[3], p[4], p[5]);
+    const glm::dvec3 centre = 0.5 * (lo + hi), half = 0.5 * (hi - lo);
+    const std::uint32_t k =
+        constants({centre.x, centre.y, centre.z, half.x, half.y, half.z, T_ / crop_reach(p.data()), T_});
+    emit(OpCode::Crop, child, frame, child, 0, k);
+    return child;
+  }
+
+  const Graph& g_;
+  double T_;
+  Tape& tape_;
+  std::vector<int> free_scalars_, free_frames_;
+  std::uint16_t scalar_high_ = 0, frame_high_ = 1;
+};
+
+}  // namespace
+
+const char* op_name(OpCode op) {
+  switch (op) {
+#define HT_X(name, doc) \
+  case OpCode::name:    \
+    return #name;
+    HT_TAPE_OPS(HT_X)
+#undef HT_X
+  }
+  return "?";
+}
+
+std::size_t Tape::leaf_count() const {
+  std::size_t n = 0;
+  for (const Instruction& i : code) n += i.op <= OpCode::Mesh ? 1 : 0;
+  return n;
+}
+
+std::string Tape::listing() const {
+  std::string out;
+  char line[160];
+  for (std::size_t i = 0; i < code.size(); ++i) {
+    const Instruction& c = code[i];
+    std::snprintf(line, sizeof line, "%5zu  %-20s out=%u a=%u b=%u c=%u k=%u\n", i, op_name(c.op), c.out, c.a, c.b, c.c,
+                  c.k);
+    out += line;
+  }
+  return out;
+}
+
+Tape compile_tape(std::shared_ptr<const Graph> graph, NodeId root, double threshold, const Aabb* region) {
+  Tape tape;
+  tape.graph = graph;
+  tape.threshold = static_cast<float>(threshold);
+  Compiler compiler(*graph, threshold, tape);
+  const int r = compiler.materialize(compiler.node(root, 0, false, region, 0));
+  tape.result = static_cast<std::uint16_t>(r);
+  tape.scalar_registers = compiler.scalar_count();
+  tape.frames = compiler.frame_count();
+  return tape;
+}
+
+}  // namespace ht

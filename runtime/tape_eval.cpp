@@ -1,0 +1,370 @@
+#include "runtime/tape_eval.hpp"
+
+#include "nodes/mesh_leaf.hpp"
+#include "runtime/tape_ops.hpp"
+
+#include <tbb/enumerable_thread_specific.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <vector>
+
+namespace ht {
+
+using tape_ops::Dual;
+using tape_ops::V3;
+
+struct TapeEvaluator::Workspace {
+  std::vector<float> scalars, frames;  // [register][lane] and [frame][axis][lane]
+  std::vector<Dual> dual_scalars, dual_frames;
+  std::vector<float> mesh_distance = std::vector<float>(kBlock);
+  std::vector<std::uint8_t> mesh_inside = std::vector<std::uint8_t>(kBlock);
+};
+
+struct TapeEvaluator::Impl {
+  tbb::enumerable_thread_specific<TapeEvaluator::Workspace> workspaces;
+};
+
+namespace {
+
+#define HT_LANE [[gnu::always_inline]] inline
+
+template <class T>
+struct Block {
+  T* s;                         // scalar register r: s + r * kBlock
+  T* f;                         // frame f, axis j: f + (3 f + j) * kBlock
+  float* mesh_distance;         // scratch for the mesh instruction
+  std::uint8_t* mesh_inside;
+  T* reg(int r) const { return s + static_cast<std::ptrdiff_t>(r) * kBlock; }
+  T* axis(int frame, int j) const { return f + static_cast<std::ptrdiff_t>(3 * frame + j) * kBlock; }
+};
+
+using namespace tape_ops;
+
+// One primitive instruction over the block: distance squared, then the falloff.
+template <class T, class Dist>
+HT_LANE void primitive_loop(const Block<T>& b, const Instruction& ins, const float* k, int n, Dist dist) {
+  const T* x = b.axis(ins.a, 0);
+  const T* y = b.axis(ins.a, 1);
+  const T* z = b.axis(ins.a, 2);
+  T* out = b.reg(ins.out);
+  for (int i = 0; i < n; ++i) out[i] = falloff2(dist(V3<T>{x[i], y[i], z[i]}), k);
+}
+
+// A curve: segment by segment over the whole block, keeping each lane's nearest.
+template <class T>
+HT_LANE void curve_loop(const Block<T>& b, const Instruction& ins, const float* k, int n) {
+  const T* x = b.axis(ins.a, 0);
+  const T* y = b.axis(ins.a, 1);
+  const T* z = b.axis(ins.a, 2);
+  T* out = b.reg(ins.out);
+  const float* s = k + 4;
+  const int segments = static_cast<int>(s[0]);
+  for (int i = 0; i < n; ++i) out[i] = T(std::numeric_limits<float>::max());
+  for (int g = 0; g < segments; ++g) {
+    const float* seg = s + 1 + 7 * g;
+    for (int i = 0; i < n; ++i) out[i] = min_(out[i], segment2(V3<T>{x[i], y[i], z[i]}, seg));
+  }
+  for (int i = 0; i < n; ++i) out[i] = falloff2(out[i], k);
+}
+
+// The mesh leaf's pseudo-distance field from dM and the inside flag (SCENE_FORMAT.md).
+HT_LANE float pseudo_distance(float dm, bool inside, float r0) {
+  if (std::isinf(dm)) return inside ? 0.0f : std::numeric_limits<float>::infinity();
+  return inside ? std::max(r0 - dm, 0.0f) : dm + r0;
+}
+HT_LANE float mesh_value(float d, float F, float kernel) {
+  if (!(d < kernel)) return 0.0f;
+  const float u = 1.0f - (d * d) / (kernel * kernel);
+  return F * u * u * u;
+}
+
+void mesh_loop(const Tape& tape, const Block<float>& b, const Instruction& ins, const float* k, int n) {
+  const MeshLeaf& leaf = *tape.meshes[ins.b];
+  const float F = k[0], kernel = k[1], r0 = k[2], radius = k[3];
+  leaf.query_batch(b.axis(ins.a, 0), b.axis(ins.a, 1), b.axis(ins.a, 2), static_cast<std::size_t>(n), radius,
+                   b.mesh_distance, b.mesh_inside);
+  float* out = b.reg(ins.out);
+  for (int i = 0; i < n; ++i)
+    out[i] = mesh_value(pseudo_distance(b.mesh_distance[i], b.mesh_inside[i] != 0, r0), F, kernel);
+}
+
+// With gradients: the distance's gradient is the unit vector from the nearest point.
+void mesh_loop(const Tape& tape, const Block<Dual>& b, const Instruction& ins, const float* k, int n) {
+  const MeshLeaf& leaf = *tape.meshes[ins.b];
+  const float F = k[0], kernel = k[1], r0 = k[2], radius = k[3];
+  const Dual* x = b.axis(ins.a, 0);
+  const Dual* y = b.axis(ins.a, 1);
+  const Dual* z = b.axis(ins.a, 2);
+  Dual* out = b.reg(ins.out);
+  for (int i = 0; i < n; ++i) {
+    const glm::dvec3 p(x[i].v, y[i].v, z[i].v);
+    const MeshLeaf::Closest c = leaf.query(p, static_cast<double>(radius));
+    const float dm = std::isfinite(c.distance) ? static_cast<float>(c.distance) : std::numeric_limits<float>::infinity();
+    const float d = pseudo_distance(dm, c.inside, r0);
+    if (!(d < kernel) || d == 0.0f || !std::isfinite(dm) || dm == 0.0f) {
+      out[i] = Dual(mesh_value(d, F, kernel));
+      continue;
+    }
+    // d(dM)/dq = (q - nearest) / dM; the pseudo-distance follows dM outside, -dM inside.
+    const glm::dvec3 nrm = (p - c.point) / c.distance;
+    const float sign = c.inside ? -1.0f : 1.0f;
+    const Dual ddm = x[i] * static_cast<float>(nrm.x) + y[i] * static_cast<float>(nrm.y) +
+                     z[i] * static_cast<float>(nrm.z);
+    const float u = 1.0f - (d * d) / (kernel * kernel);
+    const float slope = -6.0f * F * d / (kernel * kernel) * u * u * sign;
+    out[i] = chain(ddm, F * u * u * u, slope);
+  }
+}
+
+// Frames: the inverse warps. Coordinates of the turning plane are picked per instruction.
+template <class T>
+HT_LANE T sinc_(const T& t) {
+  return std::abs(val(t)) < 1e-3f ? T(1.0f) - t * t * (1.0f / 6.0f) : sin_(t) / t;
+}
+template <class T>
+HT_LANE T cosc_(const T& t) {
+  return std::abs(val(t)) < 1e-3f ? t * 0.5f - t * t * t * (1.0f / 24.0f) : (T(1.0f) - cos_(t)) / t;
+}
+
+template <class T>
+HT_LANE void warp_loop(const Block<T>& b, const Instruction& ins, const float* k, int n) {
+  if (ins.op == OpCode::Affine) {
+    const T* x = b.axis(ins.a, 0);
+    const T* y = b.axis(ins.a, 1);
+    const T* z = b.axis(ins.a, 2);
+    T* ox = b.axis(ins.out, 0);
+    T* oy = b.axis(ins.out, 1);
+    T* oz = b.axis(ins.out, 2);
+    for (int i = 0; i < n; ++i) {
+      const T px = x[i], py = y[i], pz = z[i];
+      ox[i] = px * k[0] + py * k[1] + pz * k[2] + k[3];
+      oy[i] = px * k[4] + py * k[5] + pz * k[6] + k[7];
+      oz[i] = px * k[8] + py * k[9] + pz * k[10] + k[11];
+    }
+    return;
+  }
+  const int axis = static_cast<int>(k[0]), iv = (axis + 1) % 3, iw = (axis + 2) % 3;
+  const float ch = k[1 + axis], cv = k[1 + iv], cw = k[1 + iw];
+  const T* h = b.axis(ins.a, axis);
+  const T* v = b.axis(ins.a, iv);
+  const T* w = b.axis(ins.a, iw);
+  T* oh = b.axis(ins.out, axis);
+  T* ov = b.axis(ins.out, iv);
+  T* ow = b.axis(ins.out, iw);
+  if (ins.op == OpCode::Twist) {
+    const float rate = k[4];
+    for (int i = 0; i < n; ++i) {
+      const T a = (h[i] - ch) * (-rate);
+      const T c = cos_(a), s = sin_(a);
+      const T pv = v[i] - cv, pw = w[i] - cw;
+      oh[i] = h[i];
+      ov[i] = c * pv - s * pw + cv;
+      ow[i] = s * pv + c * pw + cw;
+    }
+  } else if (ins.op == OpCode::Taper) {
+    const float h0 = k[4], h1 = k[5], s0 = k[6], s1 = k[7], inv_range = 1.0f / (h1 - h0);
+    for (int i = 0; i < n; ++i) {
+      const T t = clamp_((h[i] - ch - h0) * inv_range, 0.0f, 1.0f);
+      const T inv = T(1.0f) / (t * (s1 - s0) + s0);
+      oh[i] = h[i];
+      ov[i] = (v[i] - cv) * inv + cv;
+      ow[i] = (w[i] - cw) * inv + cw;
+    }
+  } else {  // Bend: the slice comes from the point's angle about the centre of curvature
+    const float h0 = k[4], h1 = k[5], rate = k[6];
+    for (int i = 0; i < n; ++i) {
+      const T u = h[i] - ch, vv = v[i] - cv;
+      const T hc = rate != 0.0f ? clamp_(atan2_(u * rate, T(1.0f) - vv * rate) * (1.0f / rate), h0, h1)
+                                : clamp_(u, h0, h1);
+      const T theta = hc * rate;
+      const T c = cos_(theta), s = sin_(theta);
+      const T du = u - hc * sinc_(theta), dv = vv - hc * cosc_(theta);
+      oh[i] = hc + c * du + s * dv + ch;
+      ov[i] = c * dv - s * du + cv;
+      ow[i] = w[i];
+    }
+  }
+}
+
+template <class T>
+HT_LANE void run(const Tape& tape, const Block<T>& b, int n) {
+  const float t = tape.threshold;
+  const float* pool = tape.constants.data();
+  for (const Instruction& ins : tape.code) {
+    const float* k = pool + ins.k;
+    T* out = b.reg(ins.out);
+    const T* ra = b.reg(ins.a);
+    const T* rb = b.reg(ins.b);
+    switch (ins.op) {
+      case OpCode::Point: primitive_loop(b, ins, k, n, [&](const V3<T>& q) { return point2(q, k + 4); }); break;
+      case OpCode::Segment: primitive_loop(b, ins, k, n, [&](const V3<T>& q) { return segment2(q, k + 4); }); break;
+      case OpCode::Circle: primitive_loop(b, ins, k, n, [&](const V3<T>& q) { return circle2(q, k + 4, false); }); break;
+      case OpCode::Disc: primitive_loop(b, ins, k, n, [&](const V3<T>& q) { return circle2(q, k + 4, true); }); break;
+      case OpCode::Triangle: primitive_loop(b, ins, k, n, [&](const V3<T>& q) { return triangle2(q, k + 4); }); break;
+      case OpCode::Curve: curve_loop(b, ins, k, n); break;
+      case OpCode::Box: primitive_loop(b, ins, k, n, [&](const V3<T>& q) { return box2(q, k + 4); }); break;
+      case OpCode::Cylinder: primitive_loop(b, ins, k, n, [&](const V3<T>& q) { return cylinder2(q, k + 4); }); break;
+      case OpCode::ConeSphere: primitive_loop(b, ins, k, n, [&](const V3<T>& q) { return cone_sphere2(q, k + 4); }); break;
+      case OpCode::Mesh: mesh_loop(tape, b, ins, k, n); break;
+      case OpCode::Zero:
+        for (int i = 0; i < n; ++i) out[i] = T(0.0f);
+        break;
+      case OpCode::Add:
+        for (int i = 0; i < n; ++i) out[i] = ra[i] + rb[i];
+        break;
+      case OpCode::Max:
+        for (int i = 0; i < n; ++i) out[i] = max_(ra[i], rb[i]);
+        break;
+      case OpCode::Min:
+        for (int i = 0; i < n; ++i) out[i] = min_(ra[i], rb[i]);
+        break;
+      case OpCode::RUnion:
+        for (int i = 0; i < n; ++i) out[i] = r_union(ra[i], rb[i], t);
+        break;
+      case OpCode::RIntersection:
+        for (int i = 0; i < n; ++i) out[i] = r_intersection(ra[i], rb[i], t);
+        break;
+      case OpCode::DiffMinMax:
+        for (int i = 0; i < n; ++i) out[i] = max_(T(0.0f), min_(ra[i], T(2.0f * t) - rb[i]));
+        break;
+      case OpCode::DiffRFunction:
+        for (int i = 0; i < n; ++i) out[i] = max_(T(0.0f), r_intersection(ra[i], T(2.0f * t) - rb[i], t));
+        break;
+      case OpCode::LocalBlendMinMax:
+      case OpCode::LocalBlendRFunction: {
+        const T* rc = b.reg(ins.c);
+        const bool rf = ins.op == OpCode::LocalBlendRFunction;
+        for (int i = 0; i < n; ++i) out[i] = local_blend(ra[i], rb[i], rc[i], t, rf);
+        break;
+      }
+      case OpCode::Crop: {
+        const T* x = b.axis(ins.a, 0);
+        const T* y = b.axis(ins.a, 1);
+        const T* z = b.axis(ins.a, 2);
+        for (int i = 0; i < n; ++i) out[i] = crop(rb[i], V3<T>{x[i], y[i], z[i]}, k);
+        break;
+      }
+      case OpCode::Affine:
+      case OpCode::Twist:
+      case OpCode::Taper:
+      case OpCode::Bend: warp_loop(b, ins, k, n); break;
+    }
+  }
+}
+
+// The float path is built three times and picked at load time (GCC function multiversioning):
+// the widest vectors the CPU has, with a binary that runs on any x86-64.
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+#define HT_MULTIVERSION __attribute__((target_clones("avx512f", "avx2", "default")))
+#else
+#define HT_MULTIVERSION
+#endif
+
+HT_MULTIVERSION void run_values(const Tape& tape, const Block<float>& b, int n) { run(tape, b, n); }
+void run_gradients(const Tape& tape, const Block<Dual>& b, int n) { run(tape, b, n); }
+
+#undef HT_LANE
+
+// Parallel over blocks above a small size; below it, on the calling thread (TBB's overhead
+// would dominate).
+template <class Body>
+void for_blocks(std::size_t n, Body&& body) {
+  const std::size_t blocks = (n + kBlock - 1) / kBlock;
+  if (blocks <= 2) {
+    for (std::size_t i = 0; i < blocks; ++i) body(i);
+    return;
+  }
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, blocks, 1), [&](const auto& r) {
+    for (std::size_t i = r.begin(); i != r.end(); ++i) body(i);
+  });
+}
+
+}  // namespace
+
+TapeEvaluator::TapeEvaluator(std::shared_ptr<const Tape> tape)
+    : tape_(std::move(tape)), impl_(std::make_unique<Impl>()) {}
+TapeEvaluator::~TapeEvaluator() = default;
+
+TapeEvaluator::Workspace& TapeEvaluator::workspace() const {
+  Workspace& ws = impl_->workspaces.local();
+  const std::size_t scalars = std::size_t(std::max<int>(tape_->scalar_registers, 1)) * kBlock;
+  const std::size_t frames = std::size_t(tape_->frames) * 3 * kBlock;
+  if (ws.scalars.size() < scalars) ws.scalars.resize(scalars);
+  if (ws.frames.size() < frames) ws.frames.resize(frames);
+  return ws;
+}
+
+void TapeEvaluator::field_block(const float* x, const float* y, const float* z, int n, float* values) const {
+  Workspace& ws = workspace();
+  const Block<float> b{ws.scalars.data(), ws.frames.data(), ws.mesh_distance.data(), ws.mesh_inside.data()};
+  std::copy(x, x + n, b.axis(0, 0));
+  std::copy(y, y + n, b.axis(0, 1));
+  std::copy(z, z + n, b.axis(0, 2));
+  run_values(*tape_, b, n);
+  const float* r = b.reg(tape_->result);
+  std::copy(r, r + n, values);
+}
+
+void TapeEvaluator::field(const float* x, const float* y, const float* z, std::size_t n, float* values) const {
+  for_blocks(n, [&](std::size_t block) {
+    const std::size_t at = block * kBlock;
+    const int count = static_cast<int>(std::min<std::size_t>(kBlock, n - at));
+    field_block(x + at, y + at, z + at, count, values + at);
+  });
+}
+
+void TapeEvaluator::field(std::span<const glm::dvec3> points, std::span<double> values) const {
+  if (values.size() != points.size()) throw std::invalid_argument("TapeEvaluator::field: values.size() != points.size()");
+  for_blocks(points.size(), [&](std::size_t block) {
+    const std::size_t at = block * kBlock;
+    const int count = static_cast<int>(std::min<std::size_t>(kBlock, points.size() - at));
+    float x[kBlock] = {}, y[kBlock] = {}, z[kBlock] = {}, v[kBlock];
+    for (int i = 0; i < count; ++i) {
+      x[i] = static_cast<float>(points[at + std::size_t(i)].x);
+      y[i] = static_cast<float>(points[at + std::size_t(i)].y);
+      z[i] = static_cast<float>(points[at + std::size_t(i)].z);
+    }
+    field_block(x, y, z, count, v);
+    for (int i = 0; i < count; ++i) values[at + std::size_t(i)] = v[i];
+  });
+}
+
+float TapeEvaluator::field(const glm::dvec3& p) const {
+  const float x = static_cast<float>(p.x), y = static_cast<float>(p.y), z = static_cast<float>(p.z);
+  float v;
+  field_block(&x, &y, &z, 1, &v);
+  return v;
+}
+
+void TapeEvaluator::gradient(std::span<const glm::dvec3> points, std::span<double> values,
+                             std::span<glm::dvec3> gradients) const {
+  if (gradients.size() != points.size() || (!values.empty() && values.size() != points.size()))
+    throw std::invalid_argument("TapeEvaluator::gradient: output sizes differ from points.size()");
+  for_blocks(points.size(), [&](std::size_t block) {
+    Workspace& ws = workspace();
+    const std::size_t scalars = std::size_t(std::max<int>(tape_->scalar_registers, 1)) * kBlock;
+    const std::size_t frames = std::size_t(tape_->frames) * 3 * kBlock;
+    if (ws.dual_scalars.size() < scalars) ws.dual_scalars.resize(scalars);
+    if (ws.dual_frames.size() < frames) ws.dual_frames.resize(frames);
+    const Block<Dual> b{ws.dual_scalars.data(), ws.dual_frames.data(), ws.mesh_distance.data(), ws.mesh_inside.data()};
+    const std::size_t at = block * kBlock;
+    const int count = static_cast<int>(std::min<std::size_t>(kBlock, points.size() - at));
+    for (int i = 0; i < count; ++i) {
+      const glm::dvec3& p = points[at + std::size_t(i)];
+      b.axis(0, 0)[i] = Dual(static_cast<float>(p.x), 1, 0, 0);
+      b.axis(0, 1)[i] = Dual(static_cast<float>(p.y), 0, 1, 0);
+      b.axis(0, 2)[i] = Dual(static_cast<float>(p.z), 0, 0, 1);
+    }
+    run_gradients(*tape_, b, count);
+    const Dual* r = b.reg(tape_->result);
+    for (int i = 0; i < count; ++i) {
+      if (!values.empty()) values[at + std::size_t(i)] = r[i].v;
+      gradients[at + std::size_t(i)] = glm::dvec3(r[i].dx, r[i].dy, r[i].dz);
+    }
+  });
+}
+
+}  // namespace ht

@@ -1,0 +1,53 @@
+// Evaluates a tape over many points: float32, blocks of kBlock points in structure-of-arrays
+// registers, each instruction a loop over the block's lanes; TBB spreads blocks over threads.
+// Values come from a build for the widest vectors the CPU has (AVX-512, AVX2 or baseline
+// x86-64, chosen at run time); gradients come from forward-mode differentiation of the same lane
+// code (runtime/tape_ops.hpp).
+//
+// Thread-safe: one evaluator may serve many threads. Each thread keeps its own workspace inside
+// the evaluator, so steady-state calls allocate nothing. Results do not depend on the number of
+// threads (every point is computed the same way whatever block it lands in).
+#pragma once
+
+#include "runtime/tape.hpp"
+
+#include <glm/vec3.hpp>
+
+#include <memory>
+#include <span>
+
+namespace ht {
+
+/// Points per block: registers of this many floats (measured: bench/tape_bench.cpp).
+inline constexpr int kBlock = 256;
+
+class TapeEvaluator {
+ public:
+  explicit TapeEvaluator(std::shared_ptr<const Tape> tape);
+  ~TapeEvaluator();
+  TapeEvaluator(const TapeEvaluator&) = delete;
+  TapeEvaluator& operator=(const TapeEvaluator&) = delete;
+
+  /// n points as coordinate arrays; writes n values. Parallel over blocks.
+  void field(const float* x, const float* y, const float* z, std::size_t n, float* values) const;
+  /// The same for points as vectors (converted to float).
+  void field(std::span<const glm::dvec3> points, std::span<double> values) const;
+  /// One point (a block of one lane; prefer the batch forms).
+  float field(const glm::dvec3& p) const;
+  /// Values and gradients. values may be empty.
+  void gradient(std::span<const glm::dvec3> points, std::span<double> values, std::span<glm::dvec3> gradients) const;
+
+  const Tape& tape() const { return *tape_; }
+  /// Evaluates one block of at most kBlock points on the calling thread (no TBB): the unit
+  /// that meshers and benchmarks drive directly.
+  void field_block(const float* x, const float* y, const float* z, int n, float* values) const;
+
+ private:
+  struct Workspace;
+  Workspace& workspace() const;
+  std::shared_ptr<const Tape> tape_;
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+}  // namespace ht

@@ -1,0 +1,243 @@
+// The tape against the reference tree evaluator: values and gradients on thousands of random
+// trees (every node kind but ffd, every Boolean mode, nested warps, mesh leaves), region
+// specialization (equal inside the box, strictly shorter where the box misses supports), and
+// interval analysis holding every sampled value.
+#include "nodes/mesh_leaf.hpp"
+#include "runtime/builder.hpp"
+#include "runtime/tape.hpp"
+#include "runtime/tape_eval.hpp"
+#include "runtime/tree_eval.hpp"
+#include "tests/support/random_tree.hpp"
+
+#include <glm/geometric.hpp>
+#include <gtest/gtest.h>
+
+#include <cmath>
+
+using namespace ht;
+using glm::dvec3;
+
+namespace {
+
+constexpr double kT = 0.5;
+
+// A float evaluator may land on the other side of a kink or a jump than the double one (bend's
+// branch cut, a min/max switch, a mesh's medial axis). A tape value is accepted when it is within
+// tolerance of the tree at p, or within the range the tree takes over a tiny neighbourhood of p
+// (float rounding of p itself moves it by about 1e-7).
+bool close_to_tree(const Graph& g, NodeId root, const dvec3& p, double tape, double tree, bool& conditioned) {
+  const double tol = 1e-4 * std::max(1.0, std::abs(tree));
+  conditioned = true;
+  if (std::abs(tape - tree) <= tol) return true;
+  conditioned = false;
+  const double h = 1e-5 * std::max(1.0, glm::length(p));
+  double lo = tree, hi = tree;
+  for (int axis = 0; axis < 3; ++axis)
+    for (double s : {-h, h}) {
+      dvec3 q = p;
+      q[axis] += s;
+      const double f = reference_field(g, root, kT, q);
+      lo = std::min(lo, f);
+      hi = std::max(hi, f);
+    }
+  return tape >= lo - tol && tape <= hi + tol;
+}
+
+std::vector<std::shared_ptr<const MeshLeaf>> test_meshes() {
+  static const auto meshes = [] {
+    std::vector<std::shared_ptr<const MeshLeaf>> m;
+    m.push_back(MeshLeaf::load(test::cgal_mesh("eight.off")));
+    m.push_back(MeshLeaf::load(test::cgal_mesh("sphere.off")));
+    return m;
+  }();
+  return meshes;
+}
+
+}  // namespace
+
+TEST(Tape, EqualsTheTreeOnRandomTrees) {
+  test::Rng rng(51);
+  test::RandomTreeOptions opt;
+  opt.meshes = test_meshes();
+  std::size_t points = 0, ill_conditioned = 0;
+  constexpr int kTrees = 2000, kPoints = 256;
+  for (int trial = 0; trial < kTrees; ++trial) {
+    Builder b(kT);
+    const NodeId root = test::random_tree(b, rng, opt);
+    const Tree t = b.build(root);
+    const auto tape = std::make_shared<const Tape>(compile_tape(t.graph_ptr(), root, kT));
+    const TapeEvaluator eval(tape);
+    std::vector<dvec3> pts(kPoints);
+    for (auto& p : pts) p = test::random_point(rng, 2.5);
+    std::vector<double> values(pts.size());
+    eval.field(pts, values);
+    for (std::size_t i = 0; i < pts.size(); ++i) {
+      const double tree = reference_field(t.graph(), root, kT, pts[i]);
+      bool conditioned = true;
+      ASSERT_TRUE(close_to_tree(t.graph(), root, pts[i], values[i], tree, conditioned))
+          << "trial " << trial << " point " << pts[i].x << " " << pts[i].y << " " << pts[i].z << ": tape "
+          << values[i] << " tree " << tree << "\n"
+          << tape->listing();
+      ++points;
+      ill_conditioned += conditioned ? 0 : 1;
+    }
+  }
+  // Points that needed the neighbourhood rule must stay rare.
+  EXPECT_LT(static_cast<double>(ill_conditioned), 1e-3 * static_cast<double>(points)) << ill_conditioned;
+}
+
+TEST(Tape, GradientsEqualTheTreeOnRandomTrees) {
+  test::Rng rng(52);
+  test::RandomTreeOptions opt;
+  opt.meshes = test_meshes();
+  std::size_t compared = 0, skipped = 0;
+  for (int trial = 0; trial < 300; ++trial) {
+    Builder b(kT);
+    const NodeId root = test::random_tree(b, rng, opt);
+    const Tree t = b.build(root);
+    const TapeEvaluator eval(std::make_shared<const Tape>(compile_tape(t.graph_ptr(), root, kT)));
+    std::vector<dvec3> pts(64);
+    for (auto& p : pts) p = test::random_point(rng, 2.5);
+    std::vector<double> values(pts.size());
+    std::vector<dvec3> grads(pts.size());
+    eval.gradient(pts, values, grads);
+    for (std::size_t i = 0; i < pts.size(); ++i) {
+      // Central differences are only a reference where the field is smooth around p: compare
+      // where two step sizes agree.
+      const dvec3 g1 = reference_gradient(t.graph(), root, kT, pts[i]);
+      dvec3 g2;
+      const double h = 1e-4;
+      for (int axis = 0; axis < 3; ++axis) {
+        dvec3 a = pts[i], c = pts[i];
+        a[axis] += h;
+        c[axis] -= h;
+        g2[axis] = (reference_field(t.graph(), root, kT, a) - reference_field(t.graph(), root, kT, c)) / (2 * h);
+      }
+      const double scale = std::max(1.0, glm::length(g1));
+      if (glm::length(g1 - g2) > 1e-4 * scale) {
+        ++skipped;
+        continue;
+      }
+      ++compared;
+      EXPECT_NEAR(glm::length(grads[i] - g1), 0.0, 1e-3 * scale)
+          << "trial " << trial << " at " << pts[i].x << " " << pts[i].y << " " << pts[i].z;
+      EXPECT_NEAR(values[i], reference_field(t.graph(), root, kT, pts[i]), 1e-4 * std::max(1.0, std::abs(values[i])));
+    }
+  }
+  EXPECT_GT(compared, 10u * skipped);
+}
+
+TEST(Tape, SpecializedTapeEqualsFullTapeInsideItsBox) {
+  test::Rng rng(53);
+  test::RandomTreeOptions opt;
+  opt.meshes = test_meshes();
+  std::size_t shorter = 0, trials = 0;
+  for (int trial = 0; trial < 600; ++trial) {
+    Builder b(kT);
+    const NodeId root = test::random_tree(b, rng, opt);
+    const Tree t = b.build(root);
+    const auto full = std::make_shared<const Tape>(compile_tape(t.graph_ptr(), root, kT));
+    const dvec3 lo = test::random_point(rng, 2.5);
+    const double size = std::uniform_real_distribution<double>(0.05, 1.5)(rng);
+    const Aabb box{lo, lo + dvec3(size)};
+    const auto part = std::make_shared<const Tape>(compile_tape(t.graph_ptr(), root, kT, &box));
+    ASSERT_LE(part->size(), full->size());
+    const TapeEvaluator ef(full), ep(part);
+    std::vector<dvec3> pts(128);
+    for (auto& p : pts)
+      p = lo + size * dvec3(std::uniform_real_distribution<double>(0, 1)(rng), std::uniform_real_distribution<double>(0, 1)(rng),
+                            std::uniform_real_distribution<double>(0, 1)(rng));
+    std::vector<double> vf(pts.size()), vp(pts.size());
+    ef.field(pts, vf);
+    ep.field(pts, vp);
+    for (std::size_t i = 0; i < pts.size(); ++i)
+      ASSERT_NEAR(vp[i], vf[i], 1e-5 * std::max(1.0, std::abs(vf[i]))) << "trial " << trial << "\nfull\n"
+                                                                         << full->listing() << "part\n"
+                                                                         << part->listing();
+    ++trials;
+    shorter += part->size() < full->size() ? 1 : 0;
+  }
+  EXPECT_GT(shorter, trials / 10);
+}
+
+TEST(Tape, SpecializationDropsPrimitivesWhoseSupportMissesTheBox) {
+  // A row of 100 points 1 apart with radius 0.6: a box around one of them keeps only it.
+  Builder b(kT);
+  std::vector<NodeId> parts;
+  for (int i = 0; i < 100; ++i) parts.push_back(b.point({i, 0, 0}, {0.6}));
+  const NodeId root = b.blend(parts);
+  const Tree t = b.build(root);
+  const Tape full = compile_tape(t.graph_ptr(), root, kT);
+  EXPECT_EQ(full.leaf_count(), 100u);
+  const Aabb box{{41.8, -0.2, -0.2}, {42.2, 0.2, 0.2}};
+  const Tape part = compile_tape(t.graph_ptr(), root, kT, &box);
+  EXPECT_EQ(part.leaf_count(), 1u);
+  EXPECT_EQ(part.size(), 1u);
+  const Aabb nowhere{{500, 500, 500}, {501, 501, 501}};
+  const Tape none = compile_tape(t.graph_ptr(), root, kT, &nowhere);
+  EXPECT_EQ(none.leaf_count(), 0u);
+  EXPECT_EQ(none.size(), 1u);  // Zero
+}
+
+TEST(Tape, DecidedMinMaxBranchesAreDropped) {
+  Builder b(kT);
+  const NodeId big = b.point({0, 0, 0}, {2.0, 3.0});
+  const NodeId small = b.point({0.3, 0, 0}, {0.5, 0.6});
+  const NodeId u = b.unite({big, small}, BooleanMode::MinMax);
+  const Tree t = b.build(u);
+  const Aabb near_centre{{-0.05, -0.05, -0.05}, {0.05, 0.05, 0.05}};  // big ~ 3 here, small <= 0.6
+  const Tape part = compile_tape(t.graph_ptr(), u, kT, &near_centre);
+  EXPECT_EQ(part.leaf_count(), 1u);
+  EXPECT_EQ(compile_tape(t.graph_ptr(), u, kT).leaf_count(), 2u);
+}
+
+TEST(Tape, IntervalsHoldEverySampledValue) {
+  test::Rng rng(54);
+  test::RandomTreeOptions opt;
+  opt.meshes = test_meshes();
+  for (int trial = 0; trial < 300; ++trial) {
+    Builder b(kT);
+    const NodeId root = test::random_tree(b, rng, opt);
+    const Tree t = b.build(root);
+    const dvec3 lo = test::random_point(rng, 2.5);
+    const double size = std::uniform_real_distribution<double>(0.05, 1.5)(rng);
+    const Aabb box{lo, lo + dvec3(size)};
+    for (NodeId n = 0; n < t.graph().size(); ++n)
+      for (bool blended : {false, true}) {
+        const Interval iv = field_interval(t.graph(), n, kT, box, blended);
+        for (int i = 0; i < 16; ++i) {
+          const dvec3 p = lo + size * dvec3(std::uniform_real_distribution<double>(0, 1)(rng),
+                                            std::uniform_real_distribution<double>(0, 1)(rng),
+                                            std::uniform_real_distribution<double>(0, 1)(rng));
+          const double f = reference_field(t.graph(), n, kT, p, blended);
+          ASSERT_GE(f, iv.lo - 1e-9) << t.graph().label(n) << " trial " << trial;
+          ASSERT_LE(f, iv.hi + 1e-9) << t.graph().label(n) << " trial " << trial;
+        }
+      }
+  }
+}
+
+TEST(Tape, FfdCannotCompileYet) {
+  Builder b(kT);
+  const NodeId p = b.point({0, 0, 0}, {1});
+  std::vector<dvec3> lattice;
+  for (int k = 0; k < 2; ++k)
+    for (int j = 0; j < 2; ++j)
+      for (int i = 0; i < 2; ++i) lattice.push_back({i, j, k});
+  const NodeId f = b.ffd(p, {0, 0, 0}, {1, 1, 1}, {1, 1, 1}, lattice, {0.1});
+  const Tree t = b.build(f);
+  EXPECT_THROW(compile_tape(t.graph_ptr(), f, kT), CompileError);
+}
+
+TEST(Tape, ResultsDoNotDependOnBlockBoundariesOrThreads) {
+  test::Rng rng(55);
+  Builder b(kT);
+  const NodeId root = test::random_tree(b, rng, {});
+  const Tree t = b.build(root);
+  const TapeEvaluator eval(std::make_shared<const Tape>(compile_tape(t.graph_ptr(), root, kT)));
+  std::vector<dvec3> pts(3 * kBlock + 17);
+  for (auto& p : pts) p = test::random_point(rng, 2.5);
+  std::vector<double> all(pts.size());
+  eval.field(pts, all);
+  for (std::size_t i = 0; i < pts.size(); i += 7) EXPECT_EQ(all[i], static_cast<double>(eval.field(pts[i])));
+}
