@@ -147,6 +147,10 @@ class Compiler {
       }
       case NodeKind::Curve: {
         const auto count = static_cast<std::size_t>(s[0]);
+        // The support box first: lanes outside it skip the segments (runtime/tape_eval.cpp).
+        const Aabb support = skeleton_bounds(NodeKind::Curve, s).expanded(R);
+        push3(support.lo);
+        push3(support.hi);
         constants({static_cast<double>(count > 1 ? count - 1 : 1)});
         for (std::size_t i = 0; i + 1 < std::max<std::size_t>(count, 2); ++i) {
           const glm::dvec3 a = v(1 + 3 * static_cast<int>(i));

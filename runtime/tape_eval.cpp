@@ -53,21 +53,39 @@ HT_LANE void primitive_loop(const Block<T>& b, const Instruction& ins, const flo
   for (int i = 0; i < n; ++i) out[i] = falloff2(dist(V3<T>{x[i], y[i], z[i]}), k);
 }
 
-// A curve: segment by segment over the whole block, keeping each lane's nearest.
+// A curve: its polyline has dozens of segments, and most points of a block lie outside its
+// support. Lanes go in chunks of kChunk: a chunk with no lane inside the support box is 0 at
+// once; the others run segment by segment, keeping each lane's nearest.
+constexpr int kChunk = 16;
+static_assert(kBlock % kChunk == 0, "blocks hold whole chunks");
+
 template <class T>
 HT_LANE void curve_loop(const Block<T>& b, const Instruction& ins, const float* k, int n) {
   const T* x = b.axis(ins.a, 0);
   const T* y = b.axis(ins.a, 1);
   const T* z = b.axis(ins.a, 2);
   T* out = b.reg(ins.out);
-  const float* s = k + 4;
+  const float* box = k + 4;  // support lo(3) hi(3)
+  const float* s = k + 10;
   const int segments = static_cast<int>(s[0]);
-  for (int i = 0; i < n; ++i) out[i] = T(std::numeric_limits<float>::max());
-  for (int g = 0; g < segments; ++g) {
-    const float* seg = s + 1 + 7 * g;
-    for (int i = 0; i < n; ++i) out[i] = min_(out[i], segment2(V3<T>{x[i], y[i], z[i]}, seg));
+  for (int c0 = 0; c0 < n; c0 += kChunk) {
+    int near = 0;
+    for (int i = c0; i < c0 + kChunk; ++i)
+      near |= (val(x[i]) >= box[0]) & (val(x[i]) <= box[3]) & (val(y[i]) >= box[1]) & (val(y[i]) <= box[4]) &
+              (val(z[i]) >= box[2]) & (val(z[i]) <= box[5]);
+    T* o = out + c0;
+    if (!near) {
+      for (int i = 0; i < kChunk; ++i) o[i] = T(0.0f);
+      continue;
+    }
+    for (int i = 0; i < kChunk; ++i) o[i] = T(std::numeric_limits<float>::max());
+    for (int g = 0; g < segments; ++g) {
+      const float* seg = s + 1 + 7 * g;
+      for (int i = 0; i < kChunk; ++i)
+        o[i] = min_(o[i], segment2(V3<T>{x[c0 + i], y[c0 + i], z[c0 + i]}, seg));
+    }
+    for (int i = 0; i < kChunk; ++i) o[i] = falloff2(o[i], k);
   }
-  for (int i = 0; i < n; ++i) out[i] = falloff2(out[i], k);
 }
 
 // The mesh leaf's pseudo-distance field from dM and the inside flag (SCENE_FORMAT.md).
@@ -303,6 +321,9 @@ void TapeEvaluator::field_block(const float* x, const float* y, const float* z, 
   std::copy(x, x + n, b.axis(0, 0));
   std::copy(y, y + n, b.axis(0, 1));
   std::copy(z, z + n, b.axis(0, 2));
+  // Chunked instructions run whole chunks: the lanes past n hold a harmless point.
+  const int padded = std::min(kBlock, (n + kChunk - 1) / kChunk * kChunk);
+  for (int j = 0; j < 3; ++j) std::fill(b.axis(0, j) + n, b.axis(0, j) + padded, 0.0f);
   run_values(*tape_, b, n);
   const float* r = b.reg(tape_->result);
   std::copy(r, r + n, values);
@@ -352,6 +373,8 @@ void TapeEvaluator::gradient(std::span<const glm::dvec3> points, std::span<doubl
     const Block<Dual> b{ws.dual_scalars.data(), ws.dual_frames.data(), ws.mesh_distance.data(), ws.mesh_inside.data()};
     const std::size_t at = block * kBlock;
     const int count = static_cast<int>(std::min<std::size_t>(kBlock, points.size() - at));
+    const int padded = std::min(kBlock, (count + kChunk - 1) / kChunk * kChunk);
+    for (int j = 0; j < 3; ++j) std::fill(b.axis(0, j) + count, b.axis(0, j) + padded, Dual(0.0f));
     for (int i = 0; i < count; ++i) {
       const glm::dvec3& p = points[at + std::size_t(i)];
       b.axis(0, 0)[i] = Dual(static_cast<float>(p.x), 1, 0, 0);

@@ -1,5 +1,9 @@
 #include "tools/scenes.hpp"
 
+#include "nodes/mesh_leaf.hpp"
+
+#include <glm/geometric.hpp>
+
 #include <cmath>
 #include <cstdio>
 #include <numbers>
@@ -76,6 +80,53 @@ std::string snake_json(int count, std::uint64_t seed) {
   }
   out += "  ]}\n}\n";
   return out;
+}
+
+NodeId every_kind(Builder& b, std::shared_ptr<const MeshLeaf> mesh) {
+  const Falloff f{0.4, 1.0};
+  const NodeId prims[] = {
+      b.point({0, 0, 0}, f),
+      b.segment({-0.5, 0.3, 0}, {0.5, 0.3, 0.1}, f),
+      b.circle({0.3, -0.3, 0.2}, {0, 0.3, 1}, 0.4, {0.25, 1.0}),
+      b.disc({-0.4, -0.4, -0.2}, {1, 0, 0.2}, 0.3, {0.25, 1.0}),
+      b.triangle({0, 0.5, 0.5}, {0.5, 0.8, 0.4}, {0.2, 0.4, 0.9}, {0.3, 1.0}),
+      b.box({0.6, 0.6, -0.3}, {0.9, 0.9, 0.1}, {0.3, 1.0}),
+      b.cylinder({-0.8, 0.2, -0.5}, {-0.6, 0.5, 0.2}, 0.1, {0.3, 1.0}),
+      b.cone_sphere({0.2, -0.8, 0}, {0.7, -0.6, 0.3}, 0.15, 0.05, {0.3, 1.0}),
+  };
+  const std::vector<glm::dvec3> spline = {{-0.9, -0.9, 0.5}, {-0.5, -0.6, 0.7}, {0, -0.8, 0.9}, {0.5, -0.5, 0.6}};
+  const NodeId curve = b.curve(spline, {0.3, 1.0});
+  const NodeId leaf = b.mesh(std::move(mesh), {0.1, 1.0});
+  const NodeId body = b.blend({prims[0], prims[1], curve});
+  const NodeId u = b.unite({prims[2], prims[3]}, BooleanMode::MinMax);
+  const NodeId i = b.intersect({prims[4], b.point({0.25, 0.6, 0.6}, {0.5, 1.0})}, BooleanMode::RFunction);
+  const NodeId d = b.subtract({prims[5], b.point({0.9, 0.9, 0.1}, {0.3, 1.5})});
+  const NodeId lb = b.local_blend(prims[6], prims[7], b.box({-0.2, -0.5, -0.5}, {0.2, 0.5, 0.5}, {0.3, 1.0}));
+  const NodeId crop = b.crop(leaf, {-1, -1, -0.2}, {1, 1, 1});
+  const NodeId warped = b.affine(b.twist(b.taper(b.bend(body, Axis::X, {0, 0, 0}, -0.5, 0.5, 0.4), Axis::Z, {0, 0, 0}, -0.5,
+                                                 0.5, 1.0, 0.6),
+                                         Axis::Y, {0, 0, 0}, 0.8),
+                                 glm::dmat4(1.0));
+  return b.blend({warped, u, i, d, lb, crop});
+}
+
+NodeId mesh_with_primitives(Builder& b, std::shared_ptr<const MeshLeaf> mesh) {
+  const Aabb box = mesh->bounds();
+  const double size = glm::length(box.size());
+  const glm::dvec3 c = box.center(), h = 0.5 * box.size();
+  const NodeId leaf = b.mesh(std::move(mesh), {0.03 * size, 1.0});
+  const NodeId perch = b.segment(c + glm::dvec3(-h.x, -h.y, -h.z), c + glm::dvec3(h.x, -h.y, -h.z), {0.15 * size, 1.0});
+  const NodeId nest = b.point(c + glm::dvec3(0, 0.2 * h.y, 0.6 * h.z), {0.12 * size, -1.5});
+  const NodeId ring = b.circle(c + glm::dvec3(0, 0, 1.1 * h.z), {0, 0, 1}, 0.5 * h.x, {0.06 * size, 1.0});
+  return b.blend({leaf, perch, nest, ring});
+}
+
+NodeId point_grid(Builder& b, int count) {
+  const int side = static_cast<int>(std::ceil(std::cbrt(static_cast<double>(count))));
+  std::vector<NodeId> parts;
+  for (int i = 0; i < count; ++i)
+    parts.push_back(b.point({i % side, (i / side) % side, i / (side * side)}, {0.6, 1.0}));
+  return b.blend(parts);
 }
 
 }  // namespace ht::scenes

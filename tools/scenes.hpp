@@ -4,6 +4,7 @@
 #include "runtime/builder.hpp"
 
 #include <cstdint>
+#include <memory>
 #include <string>
 
 namespace ht::scenes {
@@ -15,5 +16,15 @@ NodeId snake(Builder& b, int count = 250, std::uint64_t seed = 1);
 
 /// The same as scene-format JSON text (for `hybridtree generate` and the CLI tests).
 std::string snake_json(int count = 250, std::uint64_t seed = 1);
+
+/// One node of every kind but ffd (every skeleton, a mesh leaf on `mesh`, blend, the three
+/// Booleans in both modes, local blend, crop, affine, twist, taper, bend), about 2 units wide.
+NodeId every_kind(Builder& b, std::shared_ptr<const MeshLeaf> mesh);
+
+/// A mesh leaf blended with primitives that touch it (the paper's Figure 4 set-up).
+NodeId mesh_with_primitives(Builder& b, std::shared_ptr<const MeshLeaf> mesh);
+
+/// count point primitives of radius 0.6 on a grid of unit spacing, blended.
+NodeId point_grid(Builder& b, int count);
 
 }  // namespace ht::scenes
