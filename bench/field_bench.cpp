@@ -1,9 +1,8 @@
-// Field queries through the reference tree evaluator: a bunny00 mesh leaf at points within its
-// support radius, and the 250-curve snake; 1 and 2 threads (TBB arenas).
+// Mesh-leaf field queries through the reference evaluator (double, one Embree point query per
+// point): bunny00 at points within its support radius; 1 and 2 threads (TBB arenas).
 #include "bench/bench_util.hpp"
 #include "nodes/mesh_leaf.hpp"
 #include "runtime/builder.hpp"
-#include "tools/scenes.hpp"
 
 #include <benchmark/benchmark.h>
 #include <glm/geometric.hpp>
@@ -33,7 +32,7 @@ void run(benchmark::State& state, const Tree& tree, const std::vector<glm::dvec3
   std::vector<double> values(pts.size());
   tbb::task_arena arena(static_cast<int>(state.range(0)));
   for (auto _ : state) {
-    arena.execute([&] { tree.field(pts, values); });
+    arena.execute([&] { tree.reference(pts, values); });
     benchmark::DoNotOptimize(values.data());
   }
   state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations() * pts.size()));
@@ -41,7 +40,7 @@ void run(benchmark::State& state, const Tree& tree, const std::vector<glm::dvec3
 
 // Args: threads, support radius R in thousandths of the mesh's bounding-box diagonal. Points
 // are uniform in balls of radius R about random vertices, in random order (no coherence).
-void BM_TreeField_Bunny00(benchmark::State& state) {
+void BM_Reference_Bunny00(benchmark::State& state) {
   static const auto leaf = MeshLeaf::load(bench::cgal_mesh("bunny00.off"));
   const double R = 1e-3 * static_cast<double>(state.range(1)) * glm::length(leaf->bounds().size());
   Builder b(0.5);
@@ -49,24 +48,10 @@ void BM_TreeField_Bunny00(benchmark::State& state) {
   const auto pts = near_surface(*leaf, R, bench::quick_mode ? 20000 : 200000);
   run(state, tree, pts);
 }
-BENCHMARK(BM_TreeField_Bunny00)
+BENCHMARK(BM_Reference_Bunny00)
     ->ArgsProduct({{1, 2}, {10, 20}})
     ->ArgNames({"threads", "R_permille"})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
-
-void BM_TreeField_Snake250(benchmark::State& state) {
-  static Builder b(0.5);
-  static const Tree tree = b.build(scenes::snake(b, 250));
-  static const auto pts = [] {
-    std::mt19937_64 rng(8);
-    std::uniform_real_distribution<double> x(-1, 13), yz(-2, 2);
-    std::vector<glm::dvec3> p;
-    for (int i = 0; i < (bench::quick_mode ? 2000 : 20000); ++i) p.push_back({x(rng), yz(rng), yz(rng)});
-    return p;
-  }();
-  run(state, tree, pts);
-}
-BENCHMARK(BM_TreeField_Snake250)->Arg(1)->Arg(2)->ArgName("threads")->Unit(benchmark::kMillisecond)->UseRealTime();
 
 }  // namespace
