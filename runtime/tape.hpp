@@ -43,6 +43,7 @@ namespace ht {
   X(ConeSphere, "s[out] = g(distance to the hull of two spheres)")      \
   X(Mesh, "s[out] = pseudo-distance field of mesh k (Embree)")         \
   X(Zero, "s[out] = 0")                                                 \
+  X(Constant, "s[out] = constant k (a node constant over the region)")  \
   X(Add, "s[out] = s[a] + s[b]")                                        \
   X(Max, "s[out] = max(s[a], s[b])")                                    \
   X(Min, "s[out] = min(s[a], s[b])")                                    \

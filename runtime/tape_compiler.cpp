@@ -31,7 +31,15 @@ class Compiler {
   // `region` is the box of interest in this frame's coordinates, or null for everywhere.
   int node(NodeId n, int frame, bool under_blend, const Aabb* region, int depth) {
     if (depth > kMaxDepth) throw CompileError("the tree is deeper than " + std::to_string(kMaxDepth) + " nodes");
-    if (region && field_interval(g_, n, T_, *region, under_blend).zero()) return kNoValue;
+    if (region) {
+      const Interval iv = field_interval(g_, n, T_, *region, under_blend);
+      if (iv.zero()) return kNoValue;
+      if (iv.lo == iv.hi) {  // constant over the region (deep inside a mesh, say): no subtree
+        const int out = alloc_scalar();
+        emit(OpCode::Constant, out, 0, 0, 0, constants({iv.lo}));
+        return out;
+      }
+    }
     const NodeKind k = g_.kind[n];
     switch (kind_family(k)) {
       case Family::Primitive: return primitive(n, frame);

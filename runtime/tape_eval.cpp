@@ -230,6 +230,9 @@ HT_LANE void run(const Tape& tape, const Block<T>& b, int n) {
       case OpCode::Zero:
         for (int i = 0; i < n; ++i) out[i] = T(0.0f);
         break;
+      case OpCode::Constant:
+        for (int i = 0; i < n; ++i) out[i] = T(k[0]);
+        break;
       case OpCode::Add:
         for (int i = 0; i < n; ++i) out[i] = ra[i] + rb[i];
         break;

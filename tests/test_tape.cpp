@@ -217,6 +217,20 @@ TEST(Tape, IntervalsHoldEverySampledValue) {
   }
 }
 
+TEST(Tape, DeepInsideAMeshTheLeafIsAConstant) {
+  Builder b(kT);
+  const auto leaf = MeshLeaf::load(test::cgal_mesh("sphere.off"));  // radius 0.5 about the origin
+  const NodeId m = b.mesh(leaf, {0.05, 1.3});
+  const NodeId root = b.blend({m, b.point({2, 0, 0}, {0.5})});
+  const Tree t = b.build(root);
+  const Aabb inside{{-0.1, -0.1, -0.1}, {0.1, 0.1, 0.1}};
+  const auto tape = std::make_shared<const Tape>(compile_tape(t.graph_ptr(), root, kT, &inside));
+  EXPECT_EQ(tape->leaf_count(), 0u);
+  ASSERT_EQ(tape->size(), 1u);
+  EXPECT_EQ(tape->code[0].op, OpCode::Constant);
+  EXPECT_FLOAT_EQ(TapeEvaluator(tape).field({0.05, 0, 0}), 1.3f);
+}
+
 TEST(Tape, FfdCannotCompileYet) {
   Builder b(kT);
   const NodeId p = b.point({0, 0, 0}, {1});
