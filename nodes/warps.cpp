@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <vector>
 
@@ -202,20 +203,43 @@ Aabb warp_bounds(NodeKind kind, const double* s, const Aabb& box) {
       return out;
     }
     case NodeKind::Twist: {
-      // Any turn about the axis stays within the farthest corner's distance from it.
+      // The slices of the box turn by angles in [a0, a1]. A linear function of the rectangle is
+      // largest at a corner, and a corner's coordinate along a direction is largest either at an
+      // end of the angle range or where the corner turns onto that direction.
       const Frame f = frame_of(s);
       const Aabb local = local_box(f, box);
-      double reach = 0.0;
+      const double a0 = std::min(s[4] * local.lo.x, s[4] * local.hi.x);
+      const double a1 = std::max(s[4] * local.lo.x, s[4] * local.hi.x);
+      constexpr double kTurn = 2.0 * std::numbers::pi;
+      Aabb out{{local.lo.x, 0.0, 0.0}, {local.hi.x, 0.0, 0.0}};
+      out.lo.y = out.lo.z = std::numeric_limits<double>::infinity();
+      out.hi.y = out.hi.z = -std::numeric_limits<double>::infinity();
+      auto add = [&](double v, double w) {
+        out.lo.y = std::min(out.lo.y, v);
+        out.hi.y = std::max(out.hi.y, v);
+        out.lo.z = std::min(out.lo.z, w);
+        out.hi.z = std::max(out.hi.z, w);
+      };
       for (double v : {local.lo.y, local.hi.y})
-        for (double w : {local.lo.z, local.hi.z}) reach = std::max(reach, std::hypot(v, w));
-      return world_box(f, {{local.lo.x, -reach, -reach}, {local.hi.x, reach, reach}});
+        for (double w : {local.lo.z, local.hi.z}) {
+          const double r = std::hypot(v, w), phi = std::atan2(w, v);
+          for (double a : {a0, a1}) add(r * std::cos(phi + a), r * std::sin(phi + a));
+          for (int k = 0; k < 4; ++k) {  // directions +v, +w, -v, -w
+            const double psi = k * kTurn / 4;
+            // The turn that brings the corner onto psi, moved to the first one at or after a0.
+            const double turn = a0 + std::fmod(std::fmod(psi - phi - a0, kTurn) + kTurn, kTurn);
+            if (turn <= a1 || a1 - a0 >= kTurn) add(r * std::cos(psi), r * std::sin(psi));
+          }
+        }
+      return world_box(f, out);
     }
     case NodeKind::Taper: {
       // Each slice scales about the axis by a factor between the two end scales.
       const Frame f = frame_of(s);
       const Aabb local = local_box(f, box);
       const double smin = std::min(s[6], s[7]), smax = std::max(s[6], s[7]);
-      Aabb out{{local.lo.x, 0.0, 0.0}, {local.hi.x, 0.0, 0.0}};
+      const double inf = std::numeric_limits<double>::infinity();
+      Aabb out{{local.lo.x, inf, inf}, {local.hi.x, -inf, -inf}};
       for (int axis = 1; axis < 3; ++axis)
         for (double k : {smin, smax})
           for (double c : {local.lo[axis], local.hi[axis]}) {

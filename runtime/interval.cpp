@@ -153,3 +153,48 @@ Interval field_interval(const Graph& g, NodeId n, double T, const Aabb& box, boo
 bool warp_child_region(const Graph& g, NodeId n, const Aabb& box, Aabb& out) { return child_region(g, n, box, out); }
 
 }  // namespace ht
+
+namespace ht {
+
+Aabb solid_bounds(const Graph& g, NodeId n, double T, bool under_blend) {
+  const auto c = g.children_of(n);
+  const Aabb& support = g.support(n, under_blend);
+  auto child = [&](std::size_t i, bool blended) { return solid_bounds(g, c[i], T, blended); };
+  // Where a child's support is bounded it bounds everything; otherwise its solid does.
+  auto part = [&](std::size_t i, bool blended) {
+    const Aabb& s = g.support(c[i], blended);
+    return s.finite() || s.empty() ? s : child(i, blended);
+  };
+  switch (g.kind[n]) {
+    case NodeKind::Blend:
+    case NodeKind::LocalBlend: {
+      Aabb box;
+      const std::size_t count = g.kind[n] == NodeKind::Blend ? c.size() : 2;
+      for (std::size_t i = 0; i < count; ++i) box = merge(box, part(i, true));
+      return box;
+    }
+    case NodeKind::Union: {
+      Aabb box;
+      for (std::size_t i = 0; i < c.size(); ++i) box = merge(box, child(i, under_blend));
+      return box;
+    }
+    case NodeKind::Intersection: {
+      Aabb box = child(0, under_blend);
+      for (std::size_t i = 1; i < c.size(); ++i) box = ht::intersect(box, child(i, under_blend));
+      return box.empty() ? Aabb{} : box;
+    }
+    case NodeKind::Difference: return child(0, under_blend);  // f >= T needs f_A >= T
+    case NodeKind::Crop: {
+      const auto p = g.params_of(n);
+      const Aabb box = ht::intersect(child(0, under_blend), Aabb{{p[0], p[1], p[2]}, {p[3], p[4], p[5]}});
+      return box.empty() ? Aabb{} : box;
+    }
+    case NodeKind::Affine:
+    case NodeKind::Twist:
+    case NodeKind::Taper:
+    case NodeKind::Bend: return warp_bounds(g.kind[n], g.params_of(n).data(), child(0, under_blend));
+    default: return support;
+  }
+}
+
+}  // namespace ht

@@ -114,4 +114,7 @@ struct Interval {
 };
 Interval field_interval(const Graph& graph, NodeId node, double threshold, const Aabb& box, bool under_blend);
 
+/// A box holding the node's solid {f >= T} (conservative; infinite when it cannot be bounded).
+Aabb solid_bounds(const Graph& graph, NodeId node, double threshold, bool under_blend = false);
+
 }  // namespace ht

@@ -1,8 +1,12 @@
 // hybridtree: the command-line face of the library.
 //   hybridtree info SCENE                  what the scene holds and what it costs
 //   hybridtree eval SCENE [--points FILE]  field values (and gradients) at points
+//   hybridtree mesh SCENE -o OUT           a closed triangle mesh of the scene's surface
 //   hybridtree generate snake [--count N]  a procedural scene (JSON on stdout)
 // Exit codes: 0 success, 2 bad input (scene, points, arguments), 1 anything else.
+#include "meshers/mesh_checks.hpp"
+#include "meshers/mesh_io.hpp"
+#include "meshers/polygonize.hpp"
 #include "nodes/mesh_leaf.hpp"
 #include "runtime/scene.hpp"
 #include "runtime/tape.hpp"
@@ -11,6 +15,9 @@
 #include "tools/scenes.hpp"
 
 #include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+#include <tbb/global_control.h>
+#include <unistd.h>
 
 #include <array>
 #include <chrono>
@@ -173,6 +180,116 @@ int cmd_eval(const std::string& scene, const std::string& points_file, bool grad
   return std::fflush(stdout) == 0 ? 0 : 1;
 }
 
+struct MeshArgs {
+  std::string scene, out, strategy = "auto", stats_json;
+  double precision = 0.0, memory_gib = 4.0;
+  int threads = 0;
+};
+
+// A one-line progress bar on stderr, only when stderr is a terminal.
+std::function<void(double)> progress_bar() {
+  if (!::isatty(STDERR_FILENO)) return {};
+  return [](double f) {
+    const int width = 40, filled = static_cast<int>(f * width + 0.5);
+    std::fprintf(stderr, "\r[%s%s] %3d%%", std::string(std::size_t(filled), '#').c_str(),
+                 std::string(std::size_t(width - filled), ' ').c_str(), static_cast<int>(f * 100 + 0.5));
+    if (f >= 1.0) std::fprintf(stderr, "\n");
+    std::fflush(stderr);
+  };
+}
+
+void write_text_atomically(const std::string& file, const std::string& text) {
+  const std::string tmp = file + ".partial";
+  {
+    std::ofstream out(tmp, std::ios::binary);
+    if (!out) throw InputError(file + ": cannot write the stats file");
+    out << text;
+    if (!out.flush()) throw InputError(file + ": cannot write the stats file");
+  }
+  if (std::rename(tmp.c_str(), file.c_str()) != 0) throw InputError(file + ": cannot move the stats file into place");
+}
+
+int cmd_mesh(const MeshArgs& a) {
+  if (!ht::supported_mesh_extension(a.out))
+    throw InputError(a.out + ": unsupported output extension (use .ply, .obj, .off or .stl)");
+  if (a.strategy != "auto" && a.strategy != "global")
+    throw InputError("--strategy " + a.strategy + ": only the global polygonizer exists yet (auto picks it)");
+  using clock = std::chrono::steady_clock;
+  const auto t0 = clock::now();
+  const ht::Tree tree = ht::load_scene(a.scene);
+  const double load_s = std::chrono::duration<double>(clock::now() - t0).count();
+  double h = a.precision > 0 ? a.precision : tree.mesher_settings().precision;
+  const ht::Aabb solid = ht::solid_bounds(tree.graph(), tree.root(), tree.threshold());
+  if (!(h > 0)) h = solid.finite() ? glm::length(solid.size()) / 100.0 : 0.0;
+  if (!(h > 0) && solid.empty()) h = 1.0;  // an empty surface: any precision gives nothing
+  ht::PolygonizeOptions options;
+  options.precision = h;
+  options.memory_budget = static_cast<std::size_t>(a.memory_gib * double(1u << 30));
+  options.progress = progress_bar();
+  ht::PolygonizeStats stats;
+  const auto t1 = clock::now();
+  ht::TriangleMesh mesh;
+  try {
+    mesh = ht::polygonize(tree.graph_ptr(), tree.root(), tree.threshold(), options, &stats);
+  } catch (const ht::CompileError& e) {
+    throw InputError(a.scene + ": " + e.what());
+  } catch (const ht::PolygonizeError& e) {
+    throw InputError(a.scene + ": " + e.what());
+  }
+  const double mesh_s = std::chrono::duration<double>(clock::now() - t1).count();
+  if (mesh.triangles.empty()) std::fprintf(stderr, "hybridtree: warning: %s: the surface is empty; writing an empty mesh\n", a.scene.c_str());
+  const auto t2 = clock::now();
+  ht::MeshChecks checks = ht::check_mesh(mesh);
+  if (!mesh.triangles.empty()) ht::measure_surface_error(mesh, tree.evaluator(), tree.threshold(), checks);
+  const double check_s = std::chrono::duration<double>(clock::now() - t2).count();
+  const auto t3 = clock::now();
+  ht::write_mesh(mesh, a.out);
+  const double write_s = std::chrono::duration<double>(clock::now() - t3).count();
+  std::printf("%s: %zu triangles, %zu vertices, precision %g, %.3f s meshing (%zu of %zu bricks), %s, genus %ld\n",
+              a.out.c_str(), checks.triangles, checks.vertices, h, mesh_s, stats.bricks_active, stats.bricks_total,
+              checks.watertight() ? "closed manifold" : "NOT watertight", checks.genus);
+  if (!a.stats_json.empty()) {
+    nlohmann::json j;
+    j["scene"] = a.scene;
+    j["output"] = a.out;
+    j["precision"] = h;
+    j["strategy"] = "global";
+    j["triangles"] = checks.triangles;
+    j["vertices"] = checks.vertices;
+    j["checks"] = {{"closed", checks.closed()},
+                   {"manifold", checks.manifold()},
+                   {"oriented", checks.oriented()},
+                   {"watertight", checks.watertight()},
+                   {"boundary_edges", checks.boundary_edges},
+                   {"nonmanifold_edges", checks.nonmanifold_edges},
+                   {"nonmanifold_vertices", checks.nonmanifold_vertices},
+                   {"misoriented_edges", checks.misoriented_edges},
+                   {"degenerate_triangles", checks.degenerate_triangles},
+                   {"components", checks.components},
+                   {"euler_characteristic", checks.euler},
+                   {"genus", checks.genus},
+                   {"area", checks.area},
+                   {"volume", checks.volume},
+                   {"min_angle_degrees", checks.min_angle},
+                   {"min_angle_histogram_10deg", checks.min_angle_histogram},
+                   {"surface_error_vertex_max", checks.vertex_error_max},
+                   {"surface_error_vertex_mean", checks.vertex_error_mean},
+                   {"surface_error_face_max", checks.face_error_max},
+                   {"surface_error_face_mean", checks.face_error_mean}};
+    j["bricks"] = {{"total", stats.bricks_total}, {"active", stats.bricks_active}};
+    j["seconds"] = {{"load", load_s},
+                    {"classify", stats.seconds_classify},
+                    {"sample", stats.seconds_sample},
+                    {"extract", stats.seconds_extract},
+                    {"merge", stats.seconds_merge},
+                    {"mesh_total", mesh_s},
+                    {"checks", check_s},
+                    {"write", write_s}};
+    write_text_atomically(a.stats_json, j.dump(2) + "\n");
+  }
+  return 0;
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -190,6 +307,17 @@ int main(int argc, char** argv) {
   eval->add_flag("--gradient", gradient, "Also print the gradient (three more columns)");
   eval->add_option("--engine", engine, "Evaluator: tape (compiled, float, SIMD; default) or tree (reference, double)")
       ->check(CLI::IsMember({"tape", "tree"}));
+
+  MeshArgs mesh_args;
+  auto* mesh_cmd = app.add_subcommand("mesh", "Mesh the scene's surface into a closed triangle mesh");
+  mesh_cmd->add_option("scene", mesh_args.scene, "Scene file (JSON, SCENE_FORMAT v1)")->required();
+  mesh_cmd->add_option("-o,--output", mesh_args.out, "Output mesh: .ply, .obj, .off or .stl")->required();
+  mesh_cmd->add_option("--precision", mesh_args.precision, "Target edge length (default: the scene's, else 1/100 of its size)")
+      ->check(CLI::PositiveNumber);
+  mesh_cmd->add_option("--strategy", mesh_args.strategy, "auto or global");
+  mesh_cmd->add_option("--threads", mesh_args.threads, "Worker threads (default: all cores)")->check(CLI::Range(1, 1024));
+  mesh_cmd->add_option("--stats-json", mesh_args.stats_json, "Write triangles, checks and seconds per stage to FILE");
+  mesh_cmd->add_option("--memory-budget", mesh_args.memory_gib, "GiB the mesher may use (default 4)")->check(CLI::PositiveNumber);
 
   int count = 250;
   std::uint64_t seed = 1;
@@ -210,6 +338,13 @@ int main(int argc, char** argv) {
   try {
     if (*info) return cmd_info(scene);
     if (*eval) return cmd_eval(scene, points_file, gradient, engine);
+    if (*mesh_cmd) {
+      std::unique_ptr<tbb::global_control> limit;
+      if (mesh_args.threads > 0)
+        limit = std::make_unique<tbb::global_control>(tbb::global_control::max_allowed_parallelism,
+                                                      static_cast<std::size_t>(mesh_args.threads));
+      return cmd_mesh(mesh_args);
+    }
     if (*generate) {
       const std::string text = ht::scenes::snake_json(count, seed);
       std::fwrite(text.data(), 1, text.size(), stdout);
@@ -221,6 +356,9 @@ int main(int argc, char** argv) {
   } catch (const InputError& e) {
     std::fprintf(stderr, "hybridtree: %s\n", e.what());
     return 2;
+  } catch (const ht::MeshWriteError& e) {
+    std::fprintf(stderr, "hybridtree: %s\n", e.what());
+    return 1;
   } catch (const ht::EvalError& e) {
     std::fprintf(stderr, "hybridtree: %s\n", e.what());
     return 2;

@@ -1,0 +1,48 @@
+// Mesh checks: what the tests and `hybridtree mesh --stats-json` assert about every mesh.
+//   topology  closed (no boundary edge), edge- and vertex-manifold, consistently oriented,
+//             components, Euler characteristic and genus per component
+//   geometry  degenerate triangles, area, enclosed volume, minimum-angle distribution
+//   surface   |f - T| / |grad f| at vertices and face centres, through a tape
+#pragma once
+
+#include "meshers/triangle_mesh.hpp"
+
+#include <array>
+#include <cstddef>
+
+namespace ht {
+
+class TapeEvaluator;
+
+struct MeshChecks {
+  std::size_t vertices = 0, triangles = 0, edges = 0;
+  std::size_t boundary_edges = 0;       ///< used by one triangle
+  std::size_t nonmanifold_edges = 0;    ///< used by three or more
+  std::size_t misoriented_edges = 0;    ///< two triangles traverse it the same way
+  std::size_t nonmanifold_vertices = 0; ///< whose triangles form more than one fan
+  std::size_t degenerate_triangles = 0; ///< zero area (relative to the mesh's size)
+  std::size_t unused_vertices = 0;
+  std::size_t components = 0;
+  long euler = 0;                       ///< V - E + F over the used vertices
+  long genus = 0;                       ///< sum over components of (2 - chi) / 2 (closed meshes)
+  double area = 0, volume = 0;          ///< volume by the divergence theorem (closed meshes)
+  double min_angle = 0;                 ///< degrees, over all triangles
+  std::array<std::size_t, 6> min_angle_histogram{};  ///< triangles by min angle: [0,10) ... [50,60]
+  // Surface error, filled by measure_surface_error(): distance to the isosurface estimated as
+  // |f - T| / |grad f|, at vertices and at face centres.
+  double vertex_error_max = 0, vertex_error_mean = 0, face_error_max = 0, face_error_mean = 0;
+
+  bool closed() const { return boundary_edges == 0; }
+  bool manifold() const { return nonmanifold_edges == 0 && nonmanifold_vertices == 0; }
+  bool oriented() const { return misoriented_edges == 0; }
+  /// Closed, manifold, oriented, no degenerate triangle: what every mesher must return.
+  bool watertight() const { return closed() && manifold() && oriented() && degenerate_triangles == 0; }
+};
+
+/// Topology and geometry checks. Linear time; no allocation beyond a few arrays of the mesh's size.
+MeshChecks check_mesh(const TriangleMesh& mesh);
+
+/// Fills the surface-error fields of `checks` by evaluating f and grad f with the tape at T.
+void measure_surface_error(const TriangleMesh& mesh, const TapeEvaluator& tape, double threshold, MeshChecks& checks);
+
+}  // namespace ht

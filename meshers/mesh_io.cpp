@@ -1,0 +1,73 @@
+#include "meshers/mesh_io.hpp"
+
+#include "nodes/trimesh.hpp"
+
+#include <OpenMesh/Core/IO/MeshIO.hh>
+
+#include <algorithm>
+#include <cctype>
+#include <mutex>
+#include <random>
+#include <string>
+#include <system_error>
+
+namespace ht {
+
+namespace {
+std::string lower_extension(const std::filesystem::path& file) {
+  std::string ext = file.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char ch) { return char(std::tolower(ch)); });
+  return ext;
+}
+}  // namespace
+
+bool supported_mesh_extension(const std::filesystem::path& file) {
+  const std::string ext = lower_extension(file);
+  return ext == ".ply" || ext == ".obj" || ext == ".off" || ext == ".stl";
+}
+
+void to_openmesh(const TriangleMesh& mesh, TriMeshHolder& out) {
+  TriMesh& m = out.mesh;
+  m.clear();
+  m.reserve(mesh.positions.size(), 3 * mesh.triangles.size() / 2, mesh.triangles.size());
+  std::vector<TriMesh::VertexHandle> vh;
+  vh.reserve(mesh.positions.size());
+  for (const auto& p : mesh.positions) vh.push_back(m.add_vertex(TriMesh::Point(p.x, p.y, p.z)));
+  for (const auto& t : mesh.triangles) m.add_face(vh[t[0]], vh[t[1]], vh[t[2]]);
+}
+
+void write_mesh(const TriangleMesh& mesh, const std::filesystem::path& file) {
+  if (!supported_mesh_extension(file))
+    throw MeshWriteError(file.string() + ": unsupported extension (use .ply, .obj, .off or .stl)");
+  const std::filesystem::path dir = file.parent_path().empty() ? std::filesystem::path(".") : file.parent_path();
+  if (!std::filesystem::is_directory(dir)) throw MeshWriteError(file.string() + ": folder " + dir.string() + " does not exist");
+  TriMeshHolder holder;
+  to_openmesh(mesh, holder);
+  if (holder.mesh.n_faces() != mesh.triangles.size())
+    throw MeshWriteError(file.string() + ": the mesh is not a manifold OpenMesh can hold (" +
+                         std::to_string(mesh.triangles.size() - holder.mesh.n_faces()) + " faces rejected)");
+  const std::string ext = lower_extension(file);
+  OpenMesh::IO::Options options;
+  if (ext == ".ply" || ext == ".stl") options += OpenMesh::IO::Options::Binary;
+  std::random_device rd;
+  const std::filesystem::path tmp = dir / (file.stem().string() + ".partial-" + std::to_string(rd()) + ext);
+  bool ok;
+  {
+    // OpenMesh's IO manager is a process-wide singleton.
+    static std::mutex io_mutex;
+    std::lock_guard lock(io_mutex);
+    ok = OpenMesh::IO::write_mesh(holder.mesh, tmp.string(), options, 17);
+  }
+  std::error_code ec;
+  if (!ok) {
+    std::filesystem::remove(tmp, ec);
+    throw MeshWriteError(file.string() + ": cannot write (disk full, or no permission?)");
+  }
+  std::filesystem::rename(tmp, file, ec);
+  if (ec) {
+    std::filesystem::remove(tmp, ec);
+    throw MeshWriteError(file.string() + ": cannot move the finished file into place: " + ec.message());
+  }
+}
+
+}  // namespace ht

@@ -1,0 +1,29 @@
+// Mesh output through OpenMesh: .ply (binary), .obj, .off (ASCII, 17 significant digits) and
+// .stl (binary), chosen by the file's extension. Writes are atomic: the mesh goes to a temporary
+// file beside the target, which is renamed over it only when complete, so a failure never leaves
+// a half-written file.
+#pragma once
+
+#include "meshers/triangle_mesh.hpp"
+
+#include <filesystem>
+#include <stdexcept>
+
+namespace ht {
+
+class TriMeshHolder;
+
+struct MeshWriteError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+/// True for the extensions write_mesh() accepts.
+bool supported_mesh_extension(const std::filesystem::path& file);
+
+/// Writes the mesh; throws MeshWriteError naming the file and the reason.
+void write_mesh(const TriangleMesh& mesh, const std::filesystem::path& file);
+
+/// The OpenMesh form of a mesh (shared vertices, the same triangle order).
+void to_openmesh(const TriangleMesh& mesh, TriMeshHolder& out);
+
+}  // namespace ht

@@ -1,0 +1,53 @@
+// The global polygonizer: a closed, oriented 2-manifold of any node's surface {f = T} at a
+// precision (the paper's Marching Cubes path, section 3.2.1).
+//
+// The domain (the node's solid bounds) is cut into bricks of 8^3 cells of side `precision`. An
+// octree descent with interval analysis (runtime/tape.hpp) keeps only the bricks the surface may
+// cross, so the cost follows the surface's area, not the domain's volume. Each active brick
+// compiles a tape specialized to its box, samples its 9^3 grid points in one batch, and cuts each
+// cell into the six tetrahedra of Kuhn's triangulation (all sharing the cell's main diagonal,
+// so neighbouring cells' faces match). Marching tetrahedra on that conforming mesh, with one
+// inside/outside label per grid point (shared points take their owner brick's label), gives a
+// closed, oriented 2-manifold by construction. Vertices sit on grid edges, keyed by edge so they
+// are shared exactly, and are refined onto the surface by false position along their edge.
+//
+// Deterministic: the same node and precision give the same mesh at any thread count.
+#pragma once
+
+#include "meshers/triangle_mesh.hpp"
+#include "runtime/aabb.hpp"
+#include "runtime/graph.hpp"
+
+#include <cstddef>
+#include <functional>
+#include <memory>
+#include <stdexcept>
+
+namespace ht {
+
+struct PolygonizeOptions {
+  double precision = 0.0;                        ///< cell size (about the edge length); > 0
+  std::size_t memory_budget = std::size_t(4) << 30;  ///< bytes the polygonizer may use
+  int refine_steps = 6;                          ///< false-position steps per vertex (Illinois)
+  /// Called from the calling thread with the fraction done, at most about 100 times.
+  std::function<void(double)> progress;
+};
+
+struct PolygonizeStats {
+  std::size_t bricks_total = 0, bricks_active = 0;
+  std::size_t points_evaluated = 0;
+  double seconds_classify = 0, seconds_sample = 0, seconds_extract = 0, seconds_merge = 0;
+  Aabb domain;
+};
+
+/// Thrown when the request cannot be met: a precision that would exceed the memory budget (the
+/// message says how much it would need), an unbounded solid, an ffd before meshing exists.
+struct PolygonizeError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+/// Meshes node `root` of `graph` at threshold T. An empty surface gives an empty mesh.
+TriangleMesh polygonize(std::shared_ptr<const Graph> graph, NodeId root, double threshold,
+                        const PolygonizeOptions& options, PolygonizeStats* stats = nullptr);
+
+}  // namespace ht
