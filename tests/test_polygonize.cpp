@@ -1,0 +1,194 @@
+// The global polygonizer: every mesh closed, manifold, oriented and free of degenerate triangles;
+// the right topology (sphere 2, torus 0, eight.off genus 2, refined_elephant genus 3); vertices
+// on the surface within a bound that scales with the precision; volumes right; the same mesh at
+// any thread count; random trees always watertight.
+#include "meshers/mesh_checks.hpp"
+#include "meshers/polygonize.hpp"
+#include "nodes/mesh_leaf.hpp"
+#include "nodes/primitives.hpp"
+#include "runtime/builder.hpp"
+#include "runtime/tape_eval.hpp"
+#include "tests/support/random_tree.hpp"
+
+#include <glm/gtc/matrix_transform.hpp>
+#include <gtest/gtest.h>
+#include <tbb/task_arena.h>
+
+#include <cmath>
+#include <numbers>
+
+using namespace ht;
+using glm::dvec3;
+
+namespace {
+
+constexpr double kT = 0.5;
+
+MeshChecks mesh_and_check(const Tree& t, double h, TriangleMesh* out = nullptr) {
+  PolygonizeOptions o;
+  o.precision = h;
+  const TriangleMesh m = polygonize(t.graph_ptr(), t.root(), kT, o);
+  MeshChecks c = check_mesh(m);
+  if (!m.triangles.empty()) measure_surface_error(m, t.evaluator(), kT, c);
+  if (out) *out = m;
+  return c;
+}
+
+void expect_watertight(const MeshChecks& c, const std::string& what) {
+  EXPECT_TRUE(c.closed()) << what << ": " << c.boundary_edges << " boundary edges";
+  EXPECT_TRUE(c.manifold()) << what << ": " << c.nonmanifold_edges << " non-manifold edges, " << c.nonmanifold_vertices
+                            << " non-manifold vertices";
+  EXPECT_TRUE(c.oriented()) << what << ": " << c.misoriented_edges << " misoriented edges";
+  EXPECT_EQ(c.degenerate_triangles, 0u) << what;
+  EXPECT_EQ(c.unused_vertices, 0u) << what;
+}
+
+}  // namespace
+
+TEST(Polygonize, EveryPrimitiveKindIsASphereOrATorus) {
+  struct Case {
+    const char* name;
+    long euler;
+    std::function<NodeId(Builder&)> make;
+  };
+  const std::vector<dvec3> spline = {{-0.6, 0, 0}, {-0.2, 0.3, 0.1}, {0.2, -0.2, 0}, {0.6, 0.1, 0.2}};
+  const std::vector<Case> cases = {
+      {"point", 2, [](Builder& b) { return b.point({0, 0, 0}, {0.8}); }},
+      {"segment", 2, [](Builder& b) { return b.segment({-0.5, 0, 0}, {0.5, 0.2, 0}, {0.6}); }},
+      {"circle", 0, [](Builder& b) { return b.circle({0, 0, 0}, {0, 0.3, 1}, 0.6, {0.5}); }},
+      {"disc", 2, [](Builder& b) { return b.disc({0, 0, 0}, {0, 0, 1}, 0.5, {0.5}); }},
+      {"triangle", 2, [](Builder& b) { return b.triangle({0, 0, 0}, {1, 0, 0}, {0.2, 0.8, 0}, {0.5}); }},
+      {"curve", 2, [spline](Builder& b) { return b.curve(spline, {0.5}); }},
+      {"box", 2, [](Builder& b) { return b.box({-0.4, -0.3, -0.2}, {0.4, 0.3, 0.2}, {0.5}); }},
+      {"cylinder", 2, [](Builder& b) { return b.cylinder({0, 0, -0.4}, {0, 0, 0.4}, 0.3, {0.5}); }},
+      {"cone_sphere", 2, [](Builder& b) { return b.cone_sphere({-0.4, 0, 0}, {0.4, 0, 0}, 0.3, 0.1, {0.4}); }},
+  };
+  for (const Case& k : cases) {
+    for (double h : {0.04, 0.02}) {
+      Builder b(kT);
+      const Tree t = b.build(k.make(b));
+      const MeshChecks c = mesh_and_check(t, h);
+      const std::string what = std::string(k.name) + " h=" + std::to_string(h);
+      expect_watertight(c, what);
+      EXPECT_EQ(c.components, 1u) << what;
+      EXPECT_EQ(c.euler, k.euler) << what;
+      EXPECT_GT(c.volume, 0.0) << what;
+      // Vertices on the surface: refined along their edge to a small fraction of the cell.
+      EXPECT_LT(c.vertex_error_max, 0.05 * h) << what;
+      EXPECT_LT(c.face_error_max, 0.5 * h) << what;
+    }
+  }
+}
+
+TEST(Polygonize, SphereVolumeAndAreaConverge) {
+  Builder b(kT);
+  const double R = 1.0, r0 = primitive_r0(R, 1.0, kT);
+  const Tree t = b.build(b.point({0.1, 0.2, 0.3}, {R}));
+  double previous = 1e9;
+  for (double h : {0.08, 0.04, 0.02}) {
+    const MeshChecks c = mesh_and_check(t, h);
+    const double exact = 4.0 / 3.0 * std::numbers::pi * r0 * r0 * r0;
+    const double error = std::abs(c.volume - exact) / exact;
+    EXPECT_LT(error, 0.02) << h;
+    EXPECT_LT(error, previous) << "halving h must shrink the volume error";
+    previous = error;
+    EXPECT_NEAR(c.area, 4.0 * std::numbers::pi * r0 * r0, 0.03 * 4.0 * std::numbers::pi * r0 * r0);
+  }
+}
+
+TEST(Polygonize, EveryWarpStaysWatertight) {
+  for (int kind = 0; kind < 4; ++kind) {
+    Builder b(kT);
+    const NodeId child = b.box({-0.6, -0.2, -0.5}, {0.6, 0.2, 0.5}, {0.4});
+    NodeId w;
+    if (kind == 0)
+      w = b.affine(child, glm::scale(glm::rotate(glm::dmat4(1.0), 0.7, dvec3(1, 1, 0)), dvec3(1.5, 0.7, 1.0)));
+    else if (kind == 1)
+      w = b.twist(child, Axis::Z, {0, 0, 0}, 2.0);
+    else if (kind == 2)
+      w = b.taper(child, Axis::Z, {0, 0, 0}, -0.5, 0.5, 1.2, 0.4);
+    else
+      w = b.bend(child, Axis::X, {0, 0, 0}, -0.6, 0.6, 0.8);
+    const Tree t = b.build(w);
+    const MeshChecks c = mesh_and_check(t, 0.03);
+    expect_watertight(c, "warp " + std::to_string(kind));
+    EXPECT_EQ(c.euler, 2) << kind;
+    EXPECT_LT(c.vertex_error_max, 0.02 * 0.03) << kind;
+  }
+}
+
+TEST(Polygonize, RealMeshesKeepTheirGenus) {
+  struct Case {
+    const char* file;
+    long genus;
+    double precision;
+  };
+  for (const Case& k : {Case{"eight.off", 2, 0.01}, Case{"refined_elephant.off", 3, 0.01}, Case{"knot2.off", 2, 0.01}}) {
+    Builder b(kT);
+    const auto leaf = MeshLeaf::load(test::cgal_mesh(k.file));
+    const Tree t = b.build(b.mesh(leaf, {0.05}));
+    const MeshChecks c = mesh_and_check(t, k.precision);
+    expect_watertight(c, k.file);
+    EXPECT_EQ(c.genus, k.genus) << k.file;
+    EXPECT_EQ(c.components, leaf->report().components) << k.file;
+  }
+}
+
+TEST(Polygonize, RandomTreesAreAlwaysWatertight) {
+  test::Rng rng(61);
+  test::RandomTreeOptions opt;
+  opt.meshes = {MeshLeaf::load(test::cgal_mesh("eight.off")), MeshLeaf::load(test::cgal_mesh("sphere.off"))};
+  int meshed = 0, unbounded = 0;
+  for (int trial = 0; trial < 120; ++trial) {
+    Builder b(kT);
+    const NodeId root = test::random_tree(b, rng, opt);
+    const Tree t = b.build(root);
+    try {
+      const MeshChecks c = mesh_and_check(t, 0.06);
+      expect_watertight(c, "trial " + std::to_string(trial));
+      EXPECT_EQ(c.euler % 2, 0) << trial;
+      if (::testing::Test::HasFailure()) return;
+      ++meshed;
+    } catch (const PolygonizeError& e) {
+      // Only an unbounded solid may refuse (a blend over R-function differences).
+      EXPECT_NE(std::string(e.what()).find("unbounded"), std::string::npos) << e.what();
+      ++unbounded;
+    }
+  }
+  EXPECT_GT(meshed, 100);
+}
+
+TEST(Polygonize, SameMeshAtAnyThreadCount) {
+  test::Rng rng(62);
+  Builder b(kT);
+  const NodeId root = test::random_tree(b, rng, {});
+  const NodeId both = b.blend({root, b.segment({-1, 0, 0}, {1, 0, 0}, {0.6})});
+  const Tree t = b.build(both);
+  TriangleMesh one, two;
+  tbb::task_arena(1).execute([&] { mesh_and_check(t, 0.03, &one); });
+  tbb::task_arena(2).execute([&] { mesh_and_check(t, 0.03, &two); });
+  EXPECT_EQ(one.positions, two.positions);
+  EXPECT_EQ(one.triangles, two.triangles);
+}
+
+TEST(Polygonize, RefusesWhatItCannotDo) {
+  Builder b(kT);
+  const Tree t = b.build(b.point({0, 0, 0}, {1.0}));
+  PolygonizeOptions o;
+  o.precision = 1e-5;  // 10^5 cells a side
+  o.memory_budget = std::size_t(1) << 30;
+  try {
+    polygonize(t.graph_ptr(), t.root(), kT, o);
+    ADD_FAILURE() << "a 1e-5 precision fitted in 1 GiB";
+  } catch (const PolygonizeError& e) {
+    EXPECT_NE(std::string(e.what()).find("needs"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("GiB"), std::string::npos) << e.what();
+  }
+  o.precision = 0.0;
+  EXPECT_THROW(polygonize(t.graph_ptr(), t.root(), kT, o), PolygonizeError);
+  // An invisible primitive (F <= T) has an empty surface: an empty mesh, no error.
+  Builder b2(kT);
+  const Tree weak = b2.build(b2.point({0, 0, 0}, {1.0, 0.4}));
+  o.precision = 0.05;
+  EXPECT_TRUE(polygonize(weak.graph_ptr(), weak.root(), kT, o).triangles.empty());
+}
