@@ -1,0 +1,49 @@
+// Global polygonization: the 250-curve snake near the paper's 121,524 triangles (9 s on a
+// Pentium IV in the paper), the same at half the precision (the time should grow about 4x, with
+// the surface's area, not 8x with the volume), and bunny00 through a mesh leaf. 2 threads.
+#include "bench/bench_util.hpp"
+#include "meshers/polygonize.hpp"
+#include "nodes/mesh_leaf.hpp"
+#include "runtime/builder.hpp"
+#include "tools/scenes.hpp"
+
+#include <benchmark/benchmark.h>
+#include <tbb/task_arena.h>
+
+namespace {
+
+using namespace ht;
+
+void run(benchmark::State& state, const Tree& tree, double h) {
+  PolygonizeOptions o;
+  o.precision = h;
+  std::size_t triangles = 0;
+  PolygonizeStats stats;
+  tbb::task_arena arena(static_cast<int>(state.range(1)));
+  for (auto _ : state) arena.execute([&] { triangles = polygonize(tree.graph_ptr(), tree.root(), 0.5, o, &stats).triangles.size(); });
+  state.counters["triangles"] = static_cast<double>(triangles);
+  state.counters["bricks"] = static_cast<double>(stats.bricks_active);
+  state.counters["tri_per_s"] = benchmark::Counter(static_cast<double>(triangles) * double(state.iterations()),
+                                                   benchmark::Counter::kIsRate);
+}
+
+// Args: precision in 1/10000 units, threads.
+void BM_MeshSnake(benchmark::State& state) {
+  static Builder b(0.5);
+  static const Tree tree = b.build(scenes::snake(b, 250));
+  run(state, tree, 1e-4 * static_cast<double>(state.range(0)));
+}
+BENCHMARK(BM_MeshSnake)
+    ->ArgsProduct({{650, 325}, {1, 2}})
+    ->ArgNames({"h_e4", "threads"})
+    ->UseRealTime()
+    ->Unit(benchmark::kMillisecond);
+
+void BM_MeshBunny00(benchmark::State& state) {
+  static Builder b(0.5);
+  static const Tree tree = b.build(b.mesh(MeshLeaf::load(bench::cgal_mesh("bunny00.off")), {0.03}));
+  run(state, tree, 1e-4 * static_cast<double>(state.range(0)));
+}
+BENCHMARK(BM_MeshBunny00)->ArgsProduct({{100}, {2}})->ArgNames({"h_e4", "threads"})->UseRealTime()->Unit(benchmark::kMillisecond);
+
+}  // namespace
