@@ -1,10 +1,13 @@
 // The command-line tool end to end: output formats, exit codes and messages for bad input.
 #include "tests/support/test_support.hpp"
+#include "nodes/mesh_leaf.hpp"
 #include "tools/scenes.hpp"
 
 #include <gtest/gtest.h>
 
 #include <cstdlib>
+#include <fstream>
+#include <nlohmann/json.hpp>
 #include <sstream>
 
 using namespace ht;
@@ -116,5 +119,52 @@ TEST(Cli, SnakeSceneRoundTripsThroughJson) {
     EXPECT_NEAR(f1, t.reference({1, 0, 0.5}), tol * std::max(1.0, std::abs(f1))) << engine;
     EXPECT_NEAR(f2, t.reference({5, 0.5, 0}), tol * std::max(1.0, std::abs(f2))) << engine;
   }
+  std::filesystem::remove_all(dir);
+}
+
+TEST(Cli, MeshWritesAClosedMeshAndItsStatistics) {
+  const auto dir = test::temp_dir("cli-mesh");
+  const std::string s = write_scene(dir, "s.json", R"({"hybridtree": 1, "mesher": {"precision": 0.05},
+      "root": {"type": "blend", "children": [{"type": "point", "center": [0,0,0], "radius": 1},
+                                             {"type": "segment", "a": [0,0,0], "b": [1,0,0], "radius": 0.6}]}})");
+  for (const char* ext : {".off", ".ply", ".obj", ".stl"}) {
+    const std::string out = (dir / (std::string("m") + ext)).string();
+    const auto r = test::run_cli("mesh " + s + " -o " + out + " --stats-json " + (dir / "stats.json").string() + " --threads 1");
+    ASSERT_EQ(r.code, 0) << r.err;
+    // The file reads back as a closed mesh (the mesh leaf's loader rejects anything else).
+    const auto leaf = MeshLeaf::load(out);
+    EXPECT_GT(leaf->report().triangles, 100u) << ext;
+    EXPECT_EQ(leaf->report().components, 1u) << ext;
+  }
+  std::ifstream in(dir / "stats.json");
+  const auto stats = nlohmann::json::parse(in);
+  EXPECT_EQ(stats["checks"]["watertight"], true);
+  EXPECT_EQ(stats["checks"]["genus"], 0);
+  EXPECT_EQ(stats["precision"], 0.05);
+  EXPECT_GT(stats["triangles"].get<int>(), 100);
+  EXPECT_TRUE(stats["seconds"].contains("sample"));
+  std::filesystem::remove_all(dir);
+}
+
+TEST(Cli, MeshRefusesCleanlyAndLeavesNoFile) {
+  const auto dir = test::temp_dir("cli-mesh-bad");
+  const std::string s = write_scene(dir, "s.json", kBall);
+  const auto ext = test::run_cli("mesh " + s + " -o " + (dir / "m.xyz").string());
+  EXPECT_EQ(ext.code, 2);
+  EXPECT_NE(ext.err.find("unsupported output extension"), std::string::npos) << ext.err;
+  const auto budget = test::run_cli("mesh " + s + " -o " + (dir / "m.ply").string() + " --precision 1e-6");
+  EXPECT_EQ(budget.code, 2);
+  EXPECT_NE(budget.err.find("needs"), std::string::npos) << budget.err;
+  const auto folder = test::run_cli("mesh " + s + " -o " + (dir / "no" / "m.ply").string() + " --precision 0.1");
+  EXPECT_EQ(folder.code, 1);
+  EXPECT_NE(folder.err.find("does not exist"), std::string::npos) << folder.err;
+  // Nothing but the scene is left in the folder: no partial output.
+  std::size_t files = 0;
+  for ([[maybe_unused]] const auto& e : std::filesystem::directory_iterator(dir)) ++files;
+  EXPECT_EQ(files, 1u);
+  const auto empty = test::run_cli("mesh " + write_scene(dir, "e.json", R"({"hybridtree": 1, "root": {"type": "point",
+      "center": [0,0,0], "radius": 1, "strength": 0.3}})") + " -o " + (dir / "e.ply").string());
+  EXPECT_EQ(empty.code, 0) << empty.err;
+  EXPECT_NE(empty.err.find("empty"), std::string::npos) << empty.err;
   std::filesystem::remove_all(dir);
 }
