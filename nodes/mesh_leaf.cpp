@@ -915,8 +915,8 @@ std::shared_ptr<const MeshLeaf> MeshLeaf::build(std::vector<glm::dvec3> position
   leaf->accel_->compute_normals(positions, triangles, std::move(topo.nbr));
   leaf->bounds_ = box;
   leaf->name_ = std::move(name);
-  leaf->positions_ = std::move(positions);
-  leaf->triangles_ = std::move(triangles);
+  leaf->surface_->positions = std::move(positions);
+  leaf->surface_->triangles = std::move(triangles);
   return leaf;
 }
 
@@ -980,9 +980,9 @@ MeshLeaf::Closest MeshLeaf::query(const glm::dvec3& p, double radius) const {
   // Baerentzen & Aanaes: p is inside iff p - closest points against the closest feature's
   // angle-weighted pseudo-normal. On the surface itself (dist 0) either answer gives the same
   // field value, so "outside" is fine there.
-  const bool in = dist > 0 && (accel_->needs_parity(st.tri, st.feature, st.closest, positions_, triangles_)
+  const bool in = dist > 0 && (accel_->needs_parity(st.tri, st.feature, st.closest, surface_->positions, surface_->triangles)
                                    ? inside(p)
-                                   : glm::dot(p - st.closest, accel_->pseudo_normal(st.tri, st.feature, triangles_)) < 0);
+                                   : glm::dot(p - st.closest, accel_->pseudo_normal(st.tri, st.feature, surface_->triangles)) < 0);
   return {dist <= radius ? dist : kInf, in, st.closest};
 }
 
@@ -1008,22 +1008,22 @@ void MeshLeaf::query_batch(const float* xs, const float* ys, const float* zs, st
 }
 
 std::size_t MeshLeaf::bytes() const {
-  return sizeof(MeshLeaf) + name_.capacity() + positions_.capacity() * sizeof(glm::dvec3) +
-         triangles_.capacity() * sizeof(glm::uvec3) + (accel_ ? accel_->bytes() : 0);
+  return sizeof(MeshLeaf) + name_.capacity() + surface_->positions.capacity() * sizeof(glm::dvec3) +
+         surface_->triangles.capacity() * sizeof(glm::uvec3) + (accel_ ? accel_->bytes() : 0);
 }
 
 const TriMeshHolder& MeshLeaf::openmesh() const {
   std::call_once(openmesh_once_, [this] {
     auto holder = std::make_unique<TriMeshHolder>();
     TriMesh& m = holder->mesh;
-    m.reserve(positions_.size(), 3 * triangles_.size() / 2, triangles_.size());
-    for (const glm::dvec3& p : positions_) m.add_vertex(TriMesh::Point(p.x, p.y, p.z));
+    m.reserve(positions().size(), 3 * triangles().size() / 2, triangles().size());
+    for (const glm::dvec3& p : positions()) m.add_vertex(TriMesh::Point(p.x, p.y, p.z));
     // Through OpenMesh's importer, so a vertex where two shells touch (which a half-edge mesh
     // cannot represent) gets duplicated instead of losing the face.
     QuietOpenMesh quiet;
     OpenMesh::IO::ImporterT<TriMesh> importer(m);
     std::vector<OpenMesh::VertexHandle> face(3);
-    for (const glm::uvec3& t : triangles_) {
+    for (const glm::uvec3& t : triangles()) {
       for (int k = 0; k < 3; ++k)
         face[static_cast<std::size_t>(k)] = OpenMesh::VertexHandle(static_cast<int>(t[k]));
       importer.add_face(face);

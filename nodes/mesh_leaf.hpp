@@ -10,6 +10,7 @@
 // The field is the paper's pseudo-distance (section 3.1.2), exactly as SCENE_FORMAT.md defines it.
 #pragma once
 
+#include "meshers/triangle_mesh.hpp"
 #include "runtime/aabb.hpp"
 
 #include <glm/vec3.hpp>
@@ -76,8 +77,10 @@ class MeshLeaf {
   void query_batch(const float* xs, const float* ys, const float* zs, std::size_t n, float radius,
                    float* distance, std::uint8_t* inside) const;
 
-  const std::vector<glm::dvec3>& positions() const { return positions_; }
-  const std::vector<glm::uvec3>& triangles() const { return triangles_; }  ///< oriented outward
+  const std::vector<glm::dvec3>& positions() const { return surface_->positions; }
+  const std::vector<glm::uvec3>& triangles() const { return surface_->triangles; }  ///< oriented outward
+  /// The mesh itself, shared: what a mesh leaf answers when asked for its mesh (never copied).
+  std::shared_ptr<const TriangleMesh> surface() const { return surface_; }
   const Aabb& bounds() const { return bounds_; }
   const MeshReport& report() const { return report_; }
   const std::string& name() const { return name_; }
@@ -94,8 +97,7 @@ class MeshLeaf {
                                                std::string name, bool repair);
   struct Accel;  // Embree device, scene and pseudo-normals
   std::string name_;
-  std::vector<glm::dvec3> positions_;
-  std::vector<glm::uvec3> triangles_;
+  std::shared_ptr<TriangleMesh> surface_ = std::make_shared<TriangleMesh>();
   Aabb bounds_;
   MeshReport report_;
   std::unique_ptr<Accel> accel_;

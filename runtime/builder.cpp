@@ -317,8 +317,7 @@ void Builder::set_mesher(NodeId node, MesherHint hint) { graph_.mesher.at(node) 
 // an R-function intersection are 0; a min/max intersection of non-negative fields is 0 where
 // either is; a min/max difference is 0 where A is; an R-function difference is not 0 anywhere
 // (it tends to 2T/(2+sqrt 2) far from both), so its support is everything.
-void Builder::finish_supports() {
-  Graph& g = graph_;
+void compute_supports(Graph& g) {
   for (NodeId n = 0; n < g.size(); ++n) {
     const NodeKind k = g.kind[n];
     const auto p = g.params_of(n);
@@ -342,8 +341,12 @@ void Builder::finish_supports() {
           nonneg = p[1] > 0.0;
           break;
         case Family::Warp:
-          box = k == NodeKind::Ffd ? Aabb::everything() : warp_bounds(k, p.data(), sup(c[0], below));
-          if (k == NodeKind::Ffd) nonneg = p[10] > 0.0;
+          if (k == NodeKind::Ffd) {  // its field lives on its deformed mesh, once meshed
+            box = g.mesh[n] != kNone ? g.meshes[g.mesh[n]]->bounds().expanded(p[9]) : Aabb::everything();
+            nonneg = p[10] > 0.0;
+          } else {
+            box = warp_bounds(k, p.data(), sup(c[0], below));
+          }
           break;
         case Family::Operator: {
           const bool rf = use_rfunction(g.boolean[n], blended);
@@ -379,7 +382,7 @@ void Builder::finish_supports() {
 
 Tree Builder::build(NodeId root) {
   if (root >= graph_.size()) throw BuildError("root", "is not a node of this builder");
-  finish_supports();
+  compute_supports(graph_);
   return Tree(std::make_shared<const Graph>(graph_), root, threshold_, settings_);
 }
 

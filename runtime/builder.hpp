@@ -115,7 +115,6 @@ class Builder {
              BooleanMode mode = BooleanMode::Auto);
   NodeId add_primitive(NodeKind kind, std::span<const double> skeleton, Falloff f);
   void check_children(std::span<const NodeId> children, std::size_t min_count);
-  void finish_supports();
 
   double threshold_;
   std::filesystem::path base_dir_;

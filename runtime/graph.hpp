@@ -28,6 +28,8 @@ enum class MesherHint : std::uint8_t { Auto, Global, Local };
 
 /// Parameter layouts of the kinds not described in nodes/:
 ///   mesh         R F kernel_radius r0 query_radius     (nodes/mesh_leaf.hpp, MeshFieldParams)
+///   ffd          see nodes/warps.hpp; once prepared (meshers/ffd.hpp), `mesh` names its deformed
+///                mesh and its field is that mesh's pseudo-distance field with its R and F
 ///   crop         min(3) max(3)
 ///   operators    none (children only; local_blend's children are a, b, region)
 inline constexpr int kMeshParams = 5;
@@ -83,6 +85,10 @@ struct Graph {
   /// Bytes of what is derived from the model to evaluate it: supports, signs, curve polylines.
   std::size_t derived_bytes() const;
 };
+
+/// Fills support_alone, support_blended and nonnegative for every node, bottom-up (the builder
+/// calls it; so does anything that changes a node's meshes, such as ffd preparation).
+void compute_supports(Graph& graph);
 
 /// The top-level settings of a scene.
 struct MesherSettings {

@@ -42,8 +42,11 @@ Interval primitive_interval(const Graph& g, NodeId n, const Aabb& box) {
 }
 
 Interval mesh_interval(const Graph& g, NodeId n, double T, const Aabb& box) {
-  const auto p = g.params_of(n);
-  const double F = p[1], kernel = p[2], r0 = p[3], reach = p[4];
+  const auto prm = g.params_of(n);
+  // A mesh leaf carries its field parameters; a prepared ffd carries R and F.
+  const MeshFieldParams mp = g.kind[n] == NodeKind::Ffd ? mesh_field_params(prm[9], prm[10], T)
+                                                         : MeshFieldParams{prm[0], prm[1], T, prm[2], prm[3], prm[4]};
+  const double F = mp.F, kernel = mp.kernel_radius, r0 = mp.r0, reach = mp.query_radius;
   if (ht::intersect(box, g.support_alone[n]).empty()) return {};
   if (!box.finite()) return either_sign(F);
   const MeshLeaf& mesh = *g.meshes[g.mesh[n]];
@@ -141,10 +144,9 @@ Interval field_interval(const Graph& g, NodeId n, double T, const Aabb& box, boo
       if (!child_region(g, n, box, local)) local = Aabb::everything();
       return field_interval(g, c[0], T, local, under_blend);
     }
-    case NodeKind::Ffd: {
-      const double F = g.params_of(n)[10];
-      return either_sign(F);
-    }
+    case NodeKind::Ffd:
+      if (g.mesh[n] != kNone) return mesh_interval(g, n, T, box);
+      return either_sign(g.params_of(n)[10]);
     default: return primitive_interval(g, n, box);
   }
 }
@@ -193,6 +195,14 @@ Aabb solid_bounds(const Graph& g, NodeId n, double T, bool under_blend) {
     case NodeKind::Twist:
     case NodeKind::Taper:
     case NodeKind::Bend: return warp_bounds(g.kind[n], g.params_of(n).data(), child(0, under_blend));
+    case NodeKind::Ffd: {
+      if (g.mesh[n] != kNone) return support;
+      // Inside the lattice, points move within the control points' box; outside, not at all.
+      const auto p = g.params_of(n);
+      Aabb box = child(0, under_blend);
+      for (std::size_t i = kFfdHeader; i + 2 < p.size(); i += 3) box.grow({p[i], p[i + 1], p[i + 2]});
+      return box;
+    }
     default: return support;
   }
 }

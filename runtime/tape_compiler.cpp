@@ -44,7 +44,9 @@ class Compiler {
     switch (kind_family(k)) {
       case Family::Primitive: return primitive(n, frame);
       case Family::Mesh: return mesh(n, frame);
-      case Family::Warp: return warp(n, frame, under_blend, region, depth);
+      case Family::Warp:
+        if (k == NodeKind::Ffd && g_.mesh[n] != kNone) return mesh(n, frame);  // its deformed mesh
+        return warp(n, frame, under_blend, region, depth);
       case Family::Operator: break;
     }
     switch (k) {
@@ -209,13 +211,15 @@ class Compiler {
   }
 
   int mesh(NodeId n, int frame) {
-    const auto p = g_.params_of(n);
+    const auto prm = g_.params_of(n);
+    const MeshFieldParams mp = g_.kind[n] == NodeKind::Ffd ? mesh_field_params(prm[9], prm[10], T_)
+                                                            : MeshFieldParams{prm[0], prm[1], T_, prm[2], prm[3], prm[4]};
     const MeshLeaf* leaf = g_.meshes[g_.mesh[n]].get();
     auto it = std::find(tape_.meshes.begin(), tape_.meshes.end(), leaf);
     const auto index = static_cast<int>(it - tape_.meshes.begin());
     if (it == tape_.meshes.end()) tape_.meshes.push_back(leaf);
     // F, kernel radius R', r0, query radius.
-    const std::uint32_t k = constants({p[1], p[2], p[3], p[4]});
+    const std::uint32_t k = constants({mp.F, mp.kernel_radius, mp.r0, mp.query_radius});
     const int out = alloc_scalar();
     emit(OpCode::Mesh, out, frame, index, 0, k);
     return out;
@@ -225,7 +229,8 @@ class Compiler {
   int warp(NodeId n, int frame, bool under_blend, const Aabb* region, int depth) {
     const NodeKind k = g_.kind[n];
     if (k == NodeKind::Ffd)
-      throw CompileError("ffd node " + g_.label(n) + ": its field is the distance to its deformed mesh, which needs meshing");
+      throw CompileError("ffd node " + g_.label(n) +
+                         ": its field is the distance to its deformed mesh, which needs meshing first (meshers/ffd.hpp)");
     const auto p = g_.params_of(n);
     std::uint32_t at = 0;
     OpCode op = OpCode::Affine;

@@ -63,8 +63,10 @@ double reference_field(const Graph& g, NodeId n, double T, const glm::dvec3& p, 
     case NodeKind::Bend:
       return child(0, warp_inverse(k, prm.data(), p), under_blend);
     case NodeKind::Ffd:
-      throw EvalError("ffd node " + g.label(n) +
-                      ": its field is the distance to its deformed mesh, which needs meshing");
+      if (g.mesh[n] == kNone)
+        throw EvalError("ffd node " + g.label(n) +
+                        ": its field is the distance to its deformed mesh, which needs meshing first (meshers/ffd.hpp)");
+      return mesh_field(*g.meshes[g.mesh[n]], mesh_field_params(prm[9], prm[10], T), p);
     default:  // skeletal primitives
       return falloff(skeleton_distance(k, g.skeleton_of(n), p), prm[kPrimR], prm[kPrimF]);
   }

@@ -168,3 +168,26 @@ TEST(Cli, MeshRefusesCleanlyAndLeavesNoFile) {
   EXPECT_NE(empty.err.find("empty"), std::string::npos) << empty.err;
   std::filesystem::remove_all(dir);
 }
+
+TEST(Cli, ScenesWithFfdEvaluateAndMesh) {
+  const auto dir = test::temp_dir("cli-ffd");
+  std::ostringstream lattice;  // the unit lattice over [-1, 1]^3, its (1,1,1) corner pulled outward
+  for (int k = 0; k < 2; ++k)
+    for (int j = 0; j < 2; ++j)
+      for (int i = 0; i < 2; ++i) {
+        const double pull = (i && j && k) ? 0.4 : 0.0;
+        lattice << (i + j + k ? ", " : "") << '[' << (-1 + 2 * i + pull) << ", " << (-1 + 2 * j + pull) << ", "
+                << (-1 + 2 * k + pull) << ']';
+      }
+  const std::string pts = lattice.str();
+  const std::string s = write_scene(dir, "ffd.json", R"({"hybridtree": 1, "mesher": {"precision": 0.04}, "root":
+      {"type": "ffd", "min": [-1,-1,-1], "max": [1,1,1], "dims": [1,1,1], "radius": 0.1, "points": [)" + pts + R"(],
+       "child": {"type": "segment", "a": [-0.3,0,0], "b": [0.3,0.2,0.1], "radius": 0.6}}})");
+  const auto e = test::run_cli("eval " + s, "0 0 0\n3 3 3\n");
+  ASSERT_EQ(e.code, 0) << e.err;
+  EXPECT_EQ(e.out.substr(0, 2), "1\n") << e.out;  // deep inside the deformed solid: F
+  const auto m = test::run_cli("mesh " + s + " -o " + (dir / "ffd.off").string());
+  ASSERT_EQ(m.code, 0) << m.err;
+  EXPECT_NE(m.out.find("closed manifold"), std::string::npos) << m.out;
+  std::filesystem::remove_all(dir);
+}

@@ -4,6 +4,7 @@
 //   hybridtree mesh SCENE -o OUT           a closed triangle mesh of the scene's surface
 //   hybridtree generate snake [--count N]  a procedural scene (JSON on stdout)
 // Exit codes: 0 success, 2 bad input (scene, points, arguments), 1 anything else.
+#include "meshers/ffd.hpp"
 #include "meshers/mesh_checks.hpp"
 #include "meshers/mesh_io.hpp"
 #include "meshers/polygonize.hpp"
@@ -66,6 +67,24 @@ std::vector<glm::dvec3> read_points(std::istream& in, const std::string& source)
   }
   if (in.bad()) throw InputError(source + ": read error");
   return points;
+}
+
+// The precision a scene asks for: --precision, else the scene's mesher.precision, else 1/100 of
+// its solid's size (1 for an empty solid).
+double default_precision(const ht::Tree& tree, double requested) {
+  if (requested > 0) return requested;
+  if (tree.mesher_settings().precision > 0) return tree.mesher_settings().precision;
+  const ht::Aabb solid = ht::solid_bounds(tree.graph(), tree.root(), tree.threshold());
+  return solid.finite() ? std::max(glm::length(solid.size()) / 100.0, 1e-9) : 1.0;
+}
+
+// Ffd nodes need their deformed meshes before their field exists.
+ht::Tree ready(const ht::Tree& tree, double precision, const std::string& scene) {
+  try {
+    return ht::prepare_ffd(tree, precision);
+  } catch (const ht::PolygonizeError& e) {
+    throw InputError(scene + ": " + e.what());
+  }
 }
 
 int depth_of(const ht::Graph& g, ht::NodeId n) {
@@ -139,7 +158,8 @@ int cmd_info(const std::string& scene) {
 }
 
 int cmd_eval(const std::string& scene, const std::string& points_file, bool gradient, const std::string& engine) {
-  const ht::Tree tree = ht::load_scene(scene);
+  const ht::Tree loaded = ht::load_scene(scene);
+  const ht::Tree tree = ready(loaded, default_precision(loaded, 0.0), scene);
   if (engine == "tape") {
     try {
       tree.evaluator();
@@ -216,12 +236,10 @@ int cmd_mesh(const MeshArgs& a) {
     throw InputError("--strategy " + a.strategy + ": only the global polygonizer exists yet (auto picks it)");
   using clock = std::chrono::steady_clock;
   const auto t0 = clock::now();
-  const ht::Tree tree = ht::load_scene(a.scene);
+  const ht::Tree loaded = ht::load_scene(a.scene);
+  const double h = default_precision(loaded, a.precision);
+  const ht::Tree tree = ready(loaded, h, a.scene);
   const double load_s = std::chrono::duration<double>(clock::now() - t0).count();
-  double h = a.precision > 0 ? a.precision : tree.mesher_settings().precision;
-  const ht::Aabb solid = ht::solid_bounds(tree.graph(), tree.root(), tree.threshold());
-  if (!(h > 0)) h = solid.finite() ? glm::length(solid.size()) / 100.0 : 0.0;
-  if (!(h > 0) && solid.empty()) h = 1.0;  // an empty surface: any precision gives nothing
   ht::PolygonizeOptions options;
   options.precision = h;
   options.memory_budget = static_cast<std::size_t>(a.memory_gib * double(1u << 30));

@@ -1,0 +1,100 @@
+// Free-form deformation: the deformed mesh of the child carries the field; a lattice placed
+// linearly is an affine map (Bernstein polynomials reproduce linear functions), so volumes scale
+// exactly; the tape and the reference evaluator agree on prepared ffd nodes; scenes with ffd
+// evaluate and mesh from the command line.
+#include "meshers/ffd.hpp"
+#include "meshers/mesh_checks.hpp"
+#include "meshers/polygonize.hpp"
+#include "nodes/primitives.hpp"
+#include "nodes/warps.hpp"
+#include "runtime/builder.hpp"
+#include "runtime/tape_eval.hpp"
+#include "runtime/tree_eval.hpp"
+#include "tests/support/random_tree.hpp"
+
+#include <gtest/gtest.h>
+
+using namespace ht;
+using glm::dvec3;
+
+namespace {
+
+constexpr double kT = 0.5;
+
+// A (l+1)(m+1)(n+1) lattice over [lo, hi] whose points are p -> lo + stretch * (p - lo).
+std::vector<dvec3> linear_lattice(dvec3 lo, dvec3 hi, glm::ivec3 dims, dvec3 stretch) {
+  std::vector<dvec3> pts;
+  for (int k = 0; k <= dims.z; ++k)
+    for (int j = 0; j <= dims.y; ++j)
+      for (int i = 0; i <= dims.x; ++i) {
+        const dvec3 t(double(i) / dims.x, double(j) / dims.y, double(k) / dims.z);
+        pts.push_back(lo + stretch * (t * (hi - lo)));
+      }
+  return pts;
+}
+
+double meshed_volume(const Tree& t, double h, MeshChecks* checks = nullptr) {
+  PolygonizeOptions o;
+  o.precision = h;
+  const TriangleMesh m = polygonize(t.graph_ptr(), t.root(), kT, o);
+  const MeshChecks c = check_mesh(m);
+  if (checks) *checks = c;
+  return c.volume;
+}
+
+}  // namespace
+
+TEST(Ffd, LinearLatticeStretchesTheVolumeExactly) {
+  Builder b(kT);
+  const NodeId child = b.segment({-0.3, 0, 0}, {0.3, 0, 0}, {0.6});
+  const dvec3 lo(-1, -1, -1), hi(1, 1, 1);
+  const NodeId ffd = b.ffd(child, lo, hi, {3, 2, 2}, linear_lattice(lo, hi, {3, 2, 2}, {2.0, 1.0, 1.0}), {0.1, 1.0});
+  const Tree raw = b.build(ffd);
+  EXPECT_TRUE(needs_ffd_preparation(raw.graph(), ffd));
+  const Tree t = prepare_ffd(raw, 0.02);
+  EXPECT_FALSE(needs_ffd_preparation(t.graph(), ffd));
+  MeshChecks c;
+  const double v = meshed_volume(t, 0.02, &c);
+  EXPECT_TRUE(c.watertight());
+  EXPECT_EQ(c.genus, 0);
+  const double v0 = meshed_volume(raw.subtree(child), 0.02);
+  EXPECT_NEAR(v / v0, 2.0, 0.06);
+  // On the deformed surface the field is T; the deformed mesh is the child's surface stretched.
+  const dvec3 tip = dvec3(-1, 0, 0) + dvec3(2, 1, 1) * (dvec3(0.3 + primitive_r0(0.6, 1.0, kT), 0, 0) - dvec3(-1, 0, 0));
+  EXPECT_NEAR(t.reference(tip), kT, 0.02);
+}
+
+TEST(Ffd, TapeAndTreeAgreeOnPreparedFfd) {
+  test::Rng rng(71);
+  Builder b(kT);
+  const NodeId child = b.blend({b.point({0, 0, 0}, {0.8}), b.box({0, -0.2, -0.2}, {0.5, 0.2, 0.2}, {0.3})});
+  const dvec3 lo(-0.8, -0.8, -0.8), hi(0.8, 0.8, 0.8);
+  auto pts = linear_lattice(lo, hi, {2, 2, 2}, {1, 1, 1});
+  pts[13] += dvec3(0.3, 0.2, 0.0);  // pull the middle control point
+  const NodeId ffd = b.ffd(child, lo, hi, {2, 2, 2}, pts, {0.15, 1.2});
+  const NodeId root = b.blend({ffd, b.segment({0, 0, 0.5}, {0, 0, 1}, {0.3})});
+  const Tree t = prepare_ffd(b.build(root), 0.03);
+  std::vector<dvec3> q(2000);
+  for (auto& p : q) p = test::random_point(rng, 1.2);
+  std::vector<double> tape(q.size());
+  t.field(q, tape);
+  for (std::size_t i = 0; i < q.size(); ++i) {
+    const double ref = t.reference(q[i]);
+    EXPECT_NEAR(tape[i], ref, 1e-4 * std::max(1.0, std::abs(ref))) << q[i].x << " " << q[i].y << " " << q[i].z;
+  }
+  MeshChecks c;
+  meshed_volume(t, 0.03, &c);
+  EXPECT_TRUE(c.watertight());
+}
+
+TEST(Ffd, PointsOutsideTheLatticeDoNotMove) {
+  Builder b(kT);
+  const dvec3 lo(0, 0, 0), hi(1, 1, 1);
+  auto pts = linear_lattice(lo, hi, {1, 1, 1}, {1, 1, 1});
+  pts[7] += dvec3(0.5, 0.5, 0.5);
+  const NodeId f = b.ffd(b.point({0, 0, 0}, {0.5}), lo, hi, {1, 1, 1}, pts, {0.1});
+  const Tree t = b.build(f);
+  const double* prm = t.graph().params_of(f).data();
+  EXPECT_EQ(warp_forward(NodeKind::Ffd, prm, dvec3(-0.5, 0.3, 2.0)), dvec3(-0.5, 0.3, 2.0));
+  EXPECT_NEAR(glm::length(warp_forward(NodeKind::Ffd, prm, dvec3(1, 1, 1)) - dvec3(1.5, 1.5, 1.5)), 0.0, 1e-12);
+}
