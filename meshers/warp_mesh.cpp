@@ -1,0 +1,120 @@
+#include "meshers/warp_mesh.hpp"
+
+#include "nodes/warps.hpp"
+#include "runtime/tape_eval.hpp"
+
+#include <glm/geometric.hpp>
+
+#include <algorithm>
+#include <array>
+#include <unordered_map>
+#include <vector>
+
+namespace ht {
+namespace {
+
+constexpr int kMaxPasses = 10;
+constexpr int kNewtonSteps = 3;
+
+std::uint64_t edge_key(std::uint32_t a, std::uint32_t b) {
+  return (std::uint64_t(std::min(a, b)) << 32) | std::uint64_t(std::max(a, b));
+}
+
+// Newton steps toward f = T along the gradient, for a batch of points.
+void project(std::vector<glm::dvec3>& pts, const TapeEvaluator& field, double T) {
+  std::vector<double> f(pts.size());
+  std::vector<glm::dvec3> g(pts.size());
+  for (int step = 0; step < kNewtonSteps; ++step) {
+    field.gradient(pts, f, g);
+    for (std::size_t i = 0; i < pts.size(); ++i) {
+      const double g2 = glm::dot(g[i], g[i]);
+      if (g2 > 0) pts[i] -= ((f[i] - T) / g2) * g[i];
+    }
+  }
+}
+
+}  // namespace
+
+std::function<glm::dvec3(const glm::dvec3&)> forward_map(const Graph& graph, NodeId node) {
+  const NodeKind kind = graph.kind[node];
+  const auto params = graph.params_of(node);
+  std::vector<double> copy(params.begin(), params.end());
+  return [kind, copy](const glm::dvec3& p) { return warp_forward(kind, copy.data(), p); };
+}
+
+TriangleMesh warp_mesh(const TriangleMesh& child, const std::function<glm::dvec3(const glm::dvec3&)>& warp,
+                       const TapeEvaluator& field, double T, double max_edge, WarpRemeshStats* stats) {
+  std::vector<glm::dvec3> local = child.positions;  // child space
+  std::vector<glm::uvec3> tris = child.triangles;
+  std::vector<glm::dvec3> world(local.size());
+  for (std::size_t i = 0; i < local.size(); ++i) world[i] = warp(local[i]);
+  WarpRemeshStats s;
+  const double limit2 = max_edge * max_edge;
+  for (int pass = 0; pass < kMaxPasses; ++pass) {
+    // Edges too long after warping, each once, in a deterministic order.
+    std::vector<std::uint64_t> long_edges;
+    for (const auto& t : tris)
+      for (int k = 0; k < 3; ++k) {
+        const std::uint32_t a = t[k], b = t[(k + 1) % 3];
+        if (glm::dot(world[a] - world[b], world[a] - world[b]) > limit2) long_edges.push_back(edge_key(a, b));
+      }
+    std::sort(long_edges.begin(), long_edges.end());
+    long_edges.erase(std::unique(long_edges.begin(), long_edges.end()), long_edges.end());
+    if (long_edges.empty()) break;
+    s.passes = pass + 1;
+    s.edges_split += long_edges.size();
+    // New vertices: midpoints in the child's space, projected onto the child's surface.
+    std::vector<glm::dvec3> mids(long_edges.size());
+    for (std::size_t i = 0; i < long_edges.size(); ++i) {
+      const auto a = std::uint32_t(long_edges[i] >> 32), b = std::uint32_t(long_edges[i] & 0xffffffffu);
+      mids[i] = 0.5 * (local[a] + local[b]);
+    }
+    project(mids, field, T);
+    std::unordered_map<std::uint64_t, std::uint32_t> mid_of;
+    mid_of.reserve(long_edges.size() * 2);
+    for (std::size_t i = 0; i < long_edges.size(); ++i) {
+      mid_of.emplace(long_edges[i], static_cast<std::uint32_t>(local.size()));
+      local.push_back(mids[i]);
+      world.push_back(warp(mids[i]));
+    }
+    // Red-green refinement, orientation kept: rotate each triangle so its split edges come first.
+    std::vector<glm::uvec3> next;
+    next.reserve(tris.size() * 2);
+    for (const auto& t : tris) {
+      std::array<std::uint32_t, 3> m;
+      int count = 0;
+      for (int k = 0; k < 3; ++k) {
+        const auto it = mid_of.find(edge_key(t[k], t[(k + 1) % 3]));
+        m[k] = it == mid_of.end() ? kNone : it->second;
+        count += it == mid_of.end() ? 0 : 1;
+      }
+      if (count == 0) {
+        next.push_back(t);
+      } else if (count == 3) {
+        next.push_back({t[0], m[0], m[2]});
+        next.push_back({m[0], t[1], m[1]});
+        next.push_back({m[2], m[1], t[2]});
+        next.push_back({m[0], m[1], m[2]});
+      } else {
+        // Rotate so that edge 0 (t0 -> t1) is split, and for two splits edge 1 as well.
+        int r = 0;
+        while (!(m[r] != kNone && (count == 1 || m[(r + 1) % 3] != kNone))) ++r;
+        const std::uint32_t a = t[r], b = t[(r + 1) % 3], c = t[(r + 2) % 3];
+        const std::uint32_t mab = m[r], mbc = m[(r + 1) % 3];
+        if (count == 1) {
+          next.push_back({a, mab, c});
+          next.push_back({mab, b, c});
+        } else {
+          next.push_back({mab, b, mbc});
+          next.push_back({a, mab, mbc});
+          next.push_back({a, mbc, c});
+        }
+      }
+    }
+    tris = std::move(next);
+  }
+  if (stats) *stats = s;
+  return {std::move(world), std::move(tris)};
+}
+
+}  // namespace ht

@@ -1,0 +1,34 @@
+// Warped meshes (the paper, section 3.3.1): a warp's mesh is its child's mesh with every vertex
+// moved by the warp. Where the warp stretches triangles (non-uniform scaling, twist, taper,
+// bend, free-form deformation), local remeshing splits every edge that comes out longer than the
+// target: the new vertex is the midpoint in the child's space, projected onto the child's
+// surface by Newton steps on the child's field, then warped, so it lies on the warped surface
+// too. Splits use red-green templates (a triangle with 1, 2 or 3 split edges becomes 2, 3 or 4
+// triangles, orientation kept), so a closed manifold stays a closed manifold.
+#pragma once
+
+#include "meshers/triangle_mesh.hpp"
+#include "runtime/graph.hpp"
+
+#include <functional>
+#include <memory>
+
+namespace ht {
+
+class TapeEvaluator;
+
+struct WarpRemeshStats {
+  int passes = 0;
+  std::size_t edges_split = 0;
+};
+
+/// Moves child_mesh (in the child's space) by `warp` and splits edges longer than max_edge after
+/// warping, projecting new vertices onto {f_child = T} with `child_field` (the child's tape).
+TriangleMesh warp_mesh(const TriangleMesh& child_mesh, const std::function<glm::dvec3(const glm::dvec3&)>& warp,
+                       const TapeEvaluator& child_field, double threshold, double max_edge,
+                       WarpRemeshStats* stats = nullptr);
+
+/// The forward map of warp node `node` (affine, twist, taper, bend or ffd).
+std::function<glm::dvec3(const glm::dvec3&)> forward_map(const Graph& graph, NodeId node);
+
+}  // namespace ht
