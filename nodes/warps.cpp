@@ -42,6 +42,14 @@ struct Frame {
 
 Frame frame_of(const double* s) { return {static_cast<int>(s[0]), {s[1], s[2], s[3]}}; }
 
+// Turns each slice by direction * rate * h about the axis.
+glm::dvec3 twist_by(const double* s, const glm::dvec3& p, double direction) {
+  const Frame f = frame_of(s);
+  const glm::dvec3 l = f.to_local(p);
+  const double a = direction * s[4] * l.x, c = std::cos(a), sn = std::sin(a);
+  return f.to_world({l.x, c * l.y - sn * l.z, sn * l.y + c * l.z});
+}
+
 double taper_scale(const double* s, double h) {
   const double h0 = s[4], h1 = s[5], s0 = s[6], s1 = s[7];
   const double t = std::clamp((h - h0) / (h1 - h0), 0.0, 1.0);
@@ -121,13 +129,7 @@ bool affine_from_matrix(const double* m, double* out) {
 glm::dvec3 warp_forward(NodeKind kind, const double* s, const glm::dvec3& p) {
   switch (kind) {
     case NodeKind::Affine: return apply3x4(s, p);
-    case NodeKind::Twist: {
-      const Frame f = frame_of(s);
-      glm::dvec3 l = f.to_local(p);
-      const double a = s[4] * l.x, c = std::cos(a), sn = std::sin(a);
-      l = {l.x, c * l.y - sn * l.z, sn * l.y + c * l.z};
-      return f.to_world(l);
-    }
+    case NodeKind::Twist: return twist_by(s, p, 1.0);
     case NodeKind::Taper: {
       const Frame f = frame_of(s);
       glm::dvec3 l = f.to_local(p);
@@ -167,14 +169,7 @@ glm::dvec3 warp_forward(NodeKind kind, const double* s, const glm::dvec3& p) {
 glm::dvec3 warp_inverse(NodeKind kind, const double* s, const glm::dvec3& p) {
   switch (kind) {
     case NodeKind::Affine: return apply3x4(s + 12, p);
-    case NodeKind::Twist: {
-      // Twisting keeps h, so the inverse turns back by rate*h.
-      const Frame f = frame_of(s);
-      glm::dvec3 l = f.to_local(p);
-      const double a = -s[4] * l.x, c = std::cos(a), sn = std::sin(a);
-      l = {l.x, c * l.y - sn * l.z, sn * l.y + c * l.z};
-      return f.to_world(l);
-    }
+    case NodeKind::Twist: return twist_by(s, p, -1.0);  // twisting keeps h: turn back by rate*h
     case NodeKind::Taper: {
       const Frame f = frame_of(s);
       glm::dvec3 l = f.to_local(p);
