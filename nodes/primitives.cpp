@@ -104,8 +104,12 @@ double distance_to_segment(const glm::dvec3& p, const glm::dvec3& a, const glm::
 
 double distance_to_triangle(const glm::dvec3& p, const glm::dvec3& a, const glm::dvec3& b,
                             const glm::dvec3& c) {
-  // Walk the Voronoi regions of the vertices, then the edges, then the face.
+  // Walk the Voronoi regions of the vertices, then the edges, then the face. A zero-area
+  // triangle has no face region and its region tests round badly: it is its three edges.
   const glm::dvec3 ab = b - a, ac = c - a, ap = p - a;
+  const double scale2 = std::max({glm::dot(ab, ab), glm::dot(ac, ac), glm::dot(c - b, c - b)});
+  if (!(glm::length(glm::cross(ab, ac)) > 1e-12 * scale2))
+    return std::min({distance_to_segment(p, a, b), distance_to_segment(p, b, c), distance_to_segment(p, c, a)});
   const double d1 = glm::dot(ab, ap), d2 = glm::dot(ac, ap);
   if (d1 <= 0.0 && d2 <= 0.0) return glm::length(ap);
   const glm::dvec3 bp = p - b;
@@ -124,10 +128,6 @@ double distance_to_triangle(const glm::dvec3& p, const glm::dvec3& a, const glm:
     return glm::length(bp - w * (c - b));
   }
   const double denom = va + vb + vc;
-  if (!(std::abs(denom) > 0.0)) {  // degenerate triangle: the nearest of its three edges
-    return std::min({distance_to_segment(p, a, b), distance_to_segment(p, b, c),
-                     distance_to_segment(p, c, a)});
-  }
   const double v = vb / denom, w = vc / denom;
   return glm::length(ap - v * ab - w * ac);
 }

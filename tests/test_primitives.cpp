@@ -189,3 +189,13 @@ TEST(Primitives, NegativeStrengthCarves) {
   EXPECT_NEAR(t.reference({0, 0, 0}), -0.8, 1e-15);
   EXPECT_EQ(t.reference({1, 0, 0}), 0.0);
 }
+
+TEST(Primitives, ZeroAreaTriangleIsItsEdges) {
+  test::Rng rng(14);
+  const dvec3 a(0.1, 0.2, 0.3), b(1.1, 0.7, -0.2);
+  const dvec3 c = a + 0.37 * (b - a);  // exactly on the segment: zero area
+  for (int i = 0; i < 1000; ++i) {
+    const dvec3 p = test::random_point(rng, 2.0);
+    EXPECT_NEAR(distance_to_triangle(p, a, b, c), distance_to_segment(p, a, b), 1e-12);
+  }
+}

@@ -1,0 +1,864 @@
+// The sweep mesher; see meshers/sweep.hpp.
+// References: Bloomenthal & Wyvill, "Interactive techniques for implicit modeling" (1990) for
+// skeletal primitives; Ronchi, Iacono & Paolucci, "The cubed sphere" (1996) for the equiangular
+// cube-sphere map; Wang, Juettler, Zheng & Liu, "Computation of rotation minimizing frames"
+// (ACM TOG 2008) for the double-reflection frames; Christiansen & Sederberg (1978) for zipping
+// two contours by the shorter diagonal; Lawson (1977) for flipping edges toward Delaunay.
+#include "meshers/sweep.hpp"
+
+#include "meshers/polygonize.hpp"
+#include "nodes/primitives.hpp"
+
+#include <glm/geometric.hpp>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdint>
+#include <limits>
+#include <numbers>
+#include <span>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace ht {
+namespace {
+
+using glm::dvec3;
+
+constexpr double kPi = std::numbers::pi;
+// Rows of equilateral triangles with sides h lie sqrt(3)/2 h apart.
+constexpr double kRowSpacing = 0.86602540378443865;
+// Profile pieces shorter than this fraction of a row are skipped: they would only add rings
+// that (nearly) coincide with their neighbours.
+constexpr double kNegligible = 1e-9;
+
+dvec3 vec_at(const double* s, int i) { return {s[i], s[i + 1], s[i + 2]}; }
+
+// Cells of about `step` over `length`, at least `at_least`. The triangle estimate taken before
+// building keeps the count far below INT_MAX.
+int cells_for(double length, double step, int at_least) {
+  const double n = std::round(length / step);
+  return n > at_least ? static_cast<int>(n) : at_least;
+}
+
+std::uint32_t vertex_count(const TriangleMesh& m) { return static_cast<std::uint32_t>(m.positions.size()); }
+
+// ---------------------------------------------------------------------------------------------
+// Loop stacks
+
+// A closed loop of vertices, consecutive in the mesh: positions[first, first + count). A loop of
+// one vertex is a pole.
+struct Loop {
+  std::uint32_t first, count;
+};
+
+// A right-handed frame (u x v = axis): rings turn counter-clockwise around the axis, and a stack
+// runs from +axis ("top") to -axis, so that zip() faces its triangles outward.
+struct Frame {
+  dvec3 origin, axis, u, v;
+};
+
+Frame frame_around(const dvec3& origin, const dvec3& axis) {
+  // The coordinate axis least aligned with `axis` gives a well-conditioned perpendicular.
+  const dvec3 a = glm::abs(axis);
+  const dvec3 pick = a.x <= a.y && a.x <= a.z ? dvec3(1, 0, 0) : a.y <= a.z ? dvec3(0, 1, 0) : dvec3(0, 0, 1);
+  const dvec3 u = glm::normalize(glm::cross(axis, pick));
+  return {origin, axis, u, glm::cross(axis, u)};
+}
+
+// A ring of radius rho at height z on the frame's axis: a pole when rho is 0, else
+// max(3, round(2 pi rho / h)) vertices, turned by half a step when `stagger` so that equal
+// neighbouring rings zip into equilateral-like triangles.
+Loop add_ring(TriangleMesh& m, const Frame& f, double rho, double z, double h, bool stagger) {
+  const Loop loop{vertex_count(m), rho == 0.0 ? 1u : static_cast<std::uint32_t>(cells_for(2.0 * kPi * rho, h, 3))};
+  const dvec3 c = f.origin + z * f.axis;
+  if (loop.count == 1) {
+    m.positions.push_back(c);
+    return loop;
+  }
+  const double step = 2.0 * kPi / loop.count, phase = stagger ? 0.5 * step : 0.0;
+  for (std::uint32_t j = 0; j < loop.count; ++j) {
+    const double t = phase + j * step;
+    m.positions.push_back(c + rho * (std::cos(t) * f.u + std::sin(t) * f.v));
+  }
+  return loop;
+}
+
+// Zips loop a (nearer the top) to loop b with a band of a.count + b.count triangles (a pole
+// contributes none of its own): walking both loops once, each step advances the loop whose next
+// vertex gives the shorter diagonal. b's walk starts at its vertex nearest a's first. Every step
+// advances one loop, so the band is an annulus (or a fan); the one way it could still use an
+// edge twice is by sweeping a whole loop around a single vertex of the other (the diagonal it
+// starts from would come back), so the last step of each loop must come after the other loop
+// has moved on since that loop's first step.
+void zip(TriangleMesh& m, Loop a, Loop b) {
+  const auto& P = m.positions;
+  std::uint32_t offset = 0;
+  if (b.count > 1) {
+    double best = std::numeric_limits<double>::infinity();
+    for (std::uint32_t j = 0; j < b.count; ++j) {
+      const dvec3 d = P[b.first + j] - P[a.first];
+      if (glm::dot(d, d) < best) best = glm::dot(d, d), offset = j;
+    }
+  }
+  auto A = [&](std::uint32_t i) { return a.first + i % a.count; };
+  auto B = [&](std::uint32_t j) { return b.first + (j + offset) % b.count; };
+  auto dist2 = [&](std::uint32_t x, std::uint32_t y) {
+    const dvec3 d = P[x] - P[y];
+    return glm::dot(d, d);
+  };
+  const std::uint32_t na = a.count == 1 ? 0 : a.count, nb = b.count == 1 ? 0 : b.count;
+  const bool guard = na > 0 && nb > 0;
+  std::uint32_t a_started = ~0u, b_started = ~0u;  // j at a's first step, i at b's first step
+  for (std::uint32_t i = 0, j = 0; i < na || j < nb;) {
+    bool advance_a = j == nb || (i < na && dist2(A(i + 1), B(j)) < dist2(A(i), B(j + 1)));
+    if (guard && advance_a && i + 1 == na && j == a_started && j < nb) advance_a = false;
+    if (guard && !advance_a && j + 1 == nb && i == b_started && i < na) advance_a = true;
+    if (advance_a) {
+      if (i == 0) a_started = j;
+      m.triangles.push_back({A(i), B(j), A(i + 1)});
+      ++i;
+    } else {
+      if (j == 0) b_started = i;
+      m.triangles.push_back({A(i), B(j), B(j + 1)});
+      ++j;
+    }
+  }
+}
+
+void zip_stack(TriangleMesh& m, std::span<const Loop> loops, bool closed) {
+  for (std::size_t k = 0; k + 1 < loops.size(); ++k) zip(m, loops[k], loops[k + 1]);
+  if (closed) zip(m, loops.back(), loops.front());
+}
+
+// sin of a triangle's smallest angle (at most 60 degrees): twice its area over the product of
+// its two longest edges. 0 for a degenerate triangle.
+double shape_quality(const dvec3& p, const dvec3& q, const dvec3& r) {
+  const double a = glm::length(q - p), b = glm::length(r - q), c = glm::length(p - r);
+  const double two_longest = a * b * c / std::min({a, b, c});
+  return two_longest > 0.0 ? glm::length(glm::cross(q - p, r - p)) / two_longest : 0.0;
+}
+
+// A flat face zipped from loops whose corners sit far apart (the triangle's, at its acute
+// corners) keeps thin triangles there; flipping the diagonal of every coplanar convex quad whose
+// smallest angle that raises (Lawson's flips) turns them into the Delaunay triangulation of the
+// same vertices. Works on triangles [first, last) of m, whose vertices form one index range;
+// edges on the range's border are kept, and so are curved quads: on a convex surface the other
+// diagonal would dent it. Each flip raises the sorted angle list, so the loop ends.
+void flip_flat_quads(TriangleMesh& m, std::size_t first, std::size_t last) {
+  constexpr std::uint32_t kBorder = ~0u;
+  const auto& P = m.positions;
+  const std::span<glm::uvec3> T(m.triangles.data() + first, last - first);
+  std::uint32_t v0 = ~0u, v1 = 0;
+  for (const auto& t : T)
+    for (int k = 0; k < 3; ++k) v0 = std::min(v0, t[k]), v1 = std::max(v1, t[k]);
+  if (T.empty()) return;
+  const std::size_t vertices = v1 - v0 + 1, half_edges = 3 * T.size();
+  auto from = [&](std::uint32_t e) { return T[e / 3][e % 3]; };
+  auto next = [](std::uint32_t e) { return e - e % 3 + (e + 1) % 3; };
+  auto prev = [](std::uint32_t e) { return e - e % 3 + (e + 2) % 3; };
+
+  // Twins: half-edges bucketed by their lower vertex (count, prefix sum, fill), then matched
+  // within each small bucket by their upper vertex.
+  std::vector<std::uint32_t> start(vertices + 1, 0), bucket(half_edges), twin(half_edges, kBorder), out(vertices);
+  auto lower = [&](std::uint32_t e) { return std::min(from(e), from(next(e))) - v0; };
+  auto upper = [&](std::uint32_t e) { return std::max(from(e), from(next(e))); };
+  for (std::uint32_t e = 0; e < half_edges; ++e) ++start[lower(e) + 1];
+  for (std::size_t v = 0; v < vertices; ++v) start[v + 1] += start[v];
+  {
+    std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
+    for (std::uint32_t e = 0; e < half_edges; ++e) bucket[fill[lower(e)]++] = e;
+  }
+  for (std::size_t v = 0; v < vertices; ++v)
+    for (std::uint32_t i = start[v]; i < start[v + 1]; ++i)
+      for (std::uint32_t j = i + 1; j < start[v + 1]; ++j)
+        if (upper(bucket[i]) == upper(bucket[j])) {
+          twin[bucket[i]] = bucket[j];
+          twin[bucket[j]] = bucket[i];
+        }
+  for (std::uint32_t e = 0; e < half_edges; ++e) out[from(e) - v0] = e;
+
+  // Whether c and d share a triangle: c's fan, walked one way and, if it meets the border, the
+  // other way too.
+  auto share_triangle = [&](std::uint32_t c, std::uint32_t d) {
+    auto holds = [&](std::uint32_t e) {
+      const auto& t = T[e / 3];
+      return t[0] == d || t[1] == d || t[2] == d;
+    };
+    const std::uint32_t start_edge = out[c - v0];
+    std::uint32_t e = start_edge;
+    do {
+      if (holds(e)) return true;
+      e = twin[prev(e)];
+    } while (e != kBorder && e != start_edge);
+    if (e == start_edge) return false;
+    for (e = start_edge; twin[e] != kBorder;) {
+      e = next(twin[e]);  // c -> y, its twin y -> c, then c -> the vertex before y
+      if (holds(e)) return true;
+    }
+    return false;
+  };
+
+  // Only thin triangles are worth a look: those whose smallest angle is below 30 degrees.
+  constexpr double kGood = 0.5;
+  std::vector<double> quality(T.size());
+  std::vector<std::uint32_t> stack;
+  for (std::uint32_t t = 0; t < T.size(); ++t) {
+    quality[t] = shape_quality(P[T[t][0]], P[T[t][1]], P[T[t][2]]);
+    if (quality[t] < kGood)
+      for (std::uint32_t k = 0; k < 3; ++k) stack.push_back(3 * t + k);
+  }
+  std::size_t budget = 20 * half_edges;
+  while (!stack.empty() && budget-- > 0) {
+    const std::uint32_t e1 = stack.back(), e2 = twin[e1];
+    stack.pop_back();
+    if (e2 == kBorder || std::min(quality[e1 / 3], quality[e2 / 3]) >= kGood) continue;
+    const std::uint32_t t1 = e1 / 3, t2 = e2 / 3;
+    const std::uint32_t a = from(e1), b = from(next(e1)), c = from(prev(e1)), d = from(prev(e2));
+    const dvec3 n = glm::cross(P[b] - P[a], P[c] - P[a]);
+    const double scale = glm::dot(P[b] - P[a], P[b] - P[a]);
+    if (!(std::abs(glm::dot(P[d] - P[a], n)) <= 1e-9 * scale * std::sqrt(scale))) continue;  // not flat
+    const double before = std::min(quality[t1], quality[t2]);
+    const double q1 = shape_quality(P[a], P[d], P[c]), q2 = shape_quality(P[d], P[b], P[c]);
+    if (!(std::min(q1, q2) > before + 1e-12)) continue;
+    // Convex quad: the new triangles face the old way.
+    if (glm::dot(glm::cross(P[d] - P[a], P[c] - P[a]), n) <= 0.0 || glm::dot(glm::cross(P[b] - P[d], P[c] - P[d]), n) <= 0.0)
+      continue;
+    if (share_triangle(c, d)) continue;
+    // (a, b, c) + (b, a, d) -> (a, d, c) + (d, b, c), half-edge k of each starting at vertex k.
+    const std::uint32_t bc = twin[next(e1)], ca = twin[prev(e1)], ad = twin[next(e2)], db = twin[prev(e2)];
+    T[t1] = glm::uvec3(a, d, c);
+    T[t2] = glm::uvec3(d, b, c);
+    quality[t1] = q1;
+    quality[t2] = q2;
+    const std::uint32_t f1 = 3 * t1, f2 = 3 * t2;
+    auto link = [&](std::uint32_t x, std::uint32_t y) {
+      twin[x] = y;
+      if (y != kBorder) twin[y] = x;
+    };
+    link(f1 + 0, ad);
+    link(f1 + 1, f2 + 2);
+    link(f1 + 2, ca);
+    link(f2 + 0, db);
+    link(f2 + 1, bc);
+    out[a - v0] = f1 + 0;
+    out[d - v0] = f2 + 0;
+    out[b - v0] = f2 + 1;
+    out[c - v0] = f1 + 2;
+    for (std::uint32_t e : {f1 + 0, f1 + 2, f2 + 0, f2 + 1}) stack.push_back(e);
+  }
+}
+
+// ---------------------------------------------------------------------------------------------
+// Surfaces of revolution
+
+// A profile in the half-plane of a frame (rho >= 0 from the axis, z along it), sampled every
+// `step`. It runs from the top with the outside on its left (outward first, then down), which is
+// what makes zip() face outward. Arcs are parameterized by psi, the angle from +z.
+struct Profile {
+  double step;
+  std::vector<double> rho, z;
+
+  void push(double r, double zz) {
+    rho.push_back(r);
+    z.push_back(zz);
+  }
+  // Pieces join end to start: each piece after the first skips its first point.
+  void arc(double rc, double zc, double radius, double psi0, double psi1, int at_least = 1) {
+    const double length = radius * std::abs(psi1 - psi0);
+    if (!rho.empty() && length <= kNegligible * step) return;
+    const int n = cells_for(length, step, at_least);
+    for (int j = rho.empty() ? 0 : 1; j <= n; ++j) {
+      const double psi = psi0 + (psi1 - psi0) * (double(j) / n);
+      push(rc + radius * std::sin(psi), zc + radius * std::cos(psi));
+    }
+  }
+  void line(double r0, double z0, double r1, double z1) {
+    const double length = std::hypot(r1 - r0, z1 - z0);
+    if (!rho.empty() && length <= kNegligible * step) return;
+    const int n = cells_for(length, step, 1);
+    for (int j = rho.empty() ? 0 : 1; j <= n; ++j) {
+      const double t = double(j) / n;
+      push(r0 + (r1 - r0) * t, z0 + (z1 - z0) * t);
+    }
+  }
+};
+
+void revolve(TriangleMesh& m, const Frame& f, const Profile& p, double h, bool closed) {
+  std::vector<Loop> loops(p.rho.size());
+  for (std::size_t k = 0; k < loops.size(); ++k) loops[k] = add_ring(m, f, p.rho[k], p.z[k], h, k % 2 == 1);
+  zip_stack(m, loops, closed);
+}
+
+// ---------------------------------------------------------------------------------------------
+// The lattice: rounded boxes
+
+// Per axis, the lattice index i maps to a box coordinate and a cube-sphere direction component:
+// k cells over the first 45-degree arc (box coordinate -half, direction tan(angle)), `flat`
+// cells across the box (direction 0), k cells over the last arc. A surface lattice point maps to
+// center + box coordinates + r * normalize(directions): the direction lies in the normal cone of
+// that box point, so the vertex is exactly at distance r from the box.
+void rounded_box(TriangleMesh& m, const dvec3& center, const dvec3& half, double r, double h) {
+  const int k = cells_for(0.25 * kPi * r, h, 1);
+  std::array<int, 3> cells{};
+  std::array<std::vector<double>, 3> coord, dir;
+  for (int a = 0; a < 3; ++a) {
+    const int flat = half[a] > 0.0 ? cells_for(2.0 * half[a], h, 1) : 0;
+    cells[a] = 2 * k + flat;
+    coord[a].resize(cells[a] + 1);
+    dir[a].resize(cells[a] + 1);
+    for (int i = 0; i <= cells[a]; ++i) {
+      if (i < k) {
+        coord[a][i] = -half[a];
+        dir[a][i] = i == 0 ? -1.0 : std::tan(0.25 * kPi * (double(i) / k - 1.0));
+      } else if (i <= k + flat) {
+        coord[a][i] = flat == 0 ? 0.0 : -half[a] + 2.0 * half[a] * (double(i - k) / flat);  // 0: a sphere
+        dir[a][i] = 0.0;
+      } else {
+        coord[a][i] = half[a];
+        dir[a][i] = i == cells[a] ? 1.0 : std::tan(0.25 * kPi * (double(i - k - flat) / k));
+      }
+    }
+  }
+
+  // Vertex numbering, shared by the faces without any lookup: the 8 corners, then the interior
+  // points of the 12 edges (axis-major), then the interior points of the 6 faces.
+  constexpr int kOther[3][2] = {{1, 2}, {0, 2}, {0, 1}};
+  std::array<std::uint32_t, 12> edge_base{};
+  std::array<std::uint32_t, 6> face_base{};
+  std::uint32_t total = 8;
+  for (int a = 0; a < 3; ++a)
+    for (int e = 0; e < 4; ++e) {
+      edge_base[4 * a + e] = total;
+      total += static_cast<std::uint32_t>(cells[a] - 1);
+    }
+  for (int a = 0; a < 3; ++a)
+    for (int e = 0; e < 2; ++e) {
+      face_base[2 * a + e] = total;
+      total += static_cast<std::uint32_t>((cells[kOther[a][0]] - 1) * (cells[kOther[a][1]] - 1));
+    }
+  auto id = [&](const std::array<int, 3>& p) -> std::uint32_t {
+    std::array<int, 3> ext{};  // 0 at the low end, 1 at the high end, -1 inside
+    int free_axis = -1, fixed_axis = -1, extremes = 0;
+    for (int a = 0; a < 3; ++a) {
+      ext[a] = p[a] == 0 ? 0 : p[a] == cells[a] ? 1 : -1;
+      if (ext[a] < 0) {
+        free_axis = a;
+      } else {
+        fixed_axis = a;
+        ++extremes;
+      }
+    }
+    if (extremes == 3) return static_cast<std::uint32_t>(ext[0] + 2 * ext[1] + 4 * ext[2]);
+    if (extremes == 2) {
+      const int b = kOther[free_axis][0], c = kOther[free_axis][1];
+      return edge_base[4 * free_axis + ext[b] + 2 * ext[c]] + static_cast<std::uint32_t>(p[free_axis] - 1);
+    }
+    const int b = kOther[fixed_axis][0], c = kOther[fixed_axis][1];
+    return face_base[2 * fixed_axis + ext[fixed_axis]] +
+           static_cast<std::uint32_t>((p[b] - 1) + (cells[b] - 1) * (p[c] - 1));
+  };
+
+  const std::uint32_t base = vertex_count(m);
+  m.positions.resize(base + std::size_t(total));
+  std::vector<std::uint32_t> grid;
+  for (int a = 0; a < 3; ++a)
+    for (int e = 0; e < 2; ++e) {
+      const int b = kOther[a][0], c = kOther[a][1];
+      const int nb = cells[b] + 1, nc = cells[c] + 1;
+      grid.resize(std::size_t(nb) * std::size_t(nc));
+      std::array<int, 3> p{};
+      p[a] = e == 0 ? 0 : cells[a];
+      for (int l = 0; l < nc; ++l)
+        for (int j = 0; j < nb; ++j) {
+          p[b] = j;
+          p[c] = l;
+          const std::uint32_t v = base + id(p);
+          const dvec3 d(dir[0][p[0]], dir[1][p[1]], dir[2][p[2]]);
+          // Points on an edge or corner are written by each of their faces, identically.
+          m.positions[v] = center + dvec3(coord[0][p[0]], coord[1][p[1]], coord[2][p[2]]) + r * glm::normalize(d);
+          grid[std::size_t(j) + std::size_t(nb) * std::size_t(l)] = v;
+        }
+      // Walking b then c turns around +a for a = x, z and around -a for a = y (y = z x x).
+      const bool flip = (a != 1) != (e == 1);
+      for (int l = 0; l + 1 < nc; ++l)
+        for (int j = 0; j + 1 < nb; ++j) {
+          const std::uint32_t q00 = grid[std::size_t(j) + std::size_t(nb) * std::size_t(l)];
+          const std::uint32_t q10 = grid[std::size_t(j + 1) + std::size_t(nb) * std::size_t(l)];
+          const std::uint32_t q11 = grid[std::size_t(j + 1) + std::size_t(nb) * std::size_t(l + 1)];
+          const std::uint32_t q01 = grid[std::size_t(j) + std::size_t(nb) * std::size_t(l + 1)];
+          const dvec3 d0 = m.positions[q11] - m.positions[q00], d1 = m.positions[q01] - m.positions[q10];
+          // The shorter diagonal: the cube-sphere's rhombi near its corners become two
+          // near-equilateral triangles instead of two flat ones.
+          std::array<glm::uvec3, 2> t;
+          if (glm::dot(d0, d0) <= glm::dot(d1, d1))
+            t = {glm::uvec3(q00, q10, q11), glm::uvec3(q00, q11, q01)};
+          else
+            t = {glm::uvec3(q00, q10, q01), glm::uvec3(q10, q11, q01)};
+          for (auto& tri : t) m.triangles.push_back(flip ? glm::uvec3(tri.x, tri.z, tri.y) : tri);
+        }
+    }
+}
+
+// ---------------------------------------------------------------------------------------------
+// The nine surfaces
+
+void sphere(TriangleMesh& m, const dvec3& center, double r, double h) {
+  Profile p{kRowSpacing * h, {}, {}};
+  p.arc(0.0, 0.0, r, 0.0, kPi, 2);  // pole to pole: at least one ring between
+  p.rho.back() = 0.0;
+  revolve(m, frame_around(center, dvec3(0, 0, 1)), p, h, false);
+}
+
+void capsule(TriangleMesh& m, const dvec3& a, const dvec3& b, double r, double h) {
+  const double len = glm::length(b - a);
+  if (!(len > 1e-12 * r)) return sphere(m, a, r, h);  // within 1e-12 r of the true offset
+  Profile p{kRowSpacing * h, {}, {}};
+  p.arc(0.0, len, r, 0.0, 0.5 * kPi);
+  p.line(r, len, r, 0.0);
+  p.arc(0.0, 0.0, r, 0.5 * kPi, kPi);
+  p.rho.back() = 0.0;
+  revolve(m, frame_around(a, (b - a) / len), p, h, false);
+}
+
+void torus(TriangleMesh& m, const double* s, double r, double h) {
+  const Frame f = frame_around(vec_at(s, 0), vec_at(s, 3));
+  const double rho = s[6];
+  Profile p{kRowSpacing * h, {}, {}};
+  if (r < rho) {
+    // The whole cross-section; an even count keeps the half-step stagger consistent all round.
+    int n = cells_for(2.0 * kPi * r, p.step, 4);
+    n += n % 2;
+    for (int j = 0; j < n; ++j) {
+      const double psi = 2.0 * kPi * (double(j) / n);
+      p.push(rho + r * std::sin(psi), r * std::cos(psi));
+    }
+    return revolve(m, f, p, h, true);
+  }
+  // The apple: the arc of the cross-section outside the axis, from pole to pole.
+  const double reach = std::asin(rho / r), pole = std::sqrt(std::max(r * r - rho * rho, 0.0));
+  p.arc(rho, 0.0, r, -reach, kPi + reach, 2);
+  p.rho.front() = p.rho.back() = 0.0;
+  p.z.front() = pole;
+  p.z.back() = -pole;
+  revolve(m, f, p, h, false);
+}
+
+void rounded_disc(TriangleMesh& m, const double* s, double r, double h) {
+  const double rho = s[6];
+  Profile p{kRowSpacing * h, {}, {}};
+  p.line(0.0, r, rho, r);
+  p.arc(rho, 0.0, r, 0.0, kPi);
+  p.line(rho, -r, 0.0, -r);
+  p.rho.back() = 0.0;
+  revolve(m, frame_around(vec_at(s, 0), vec_at(s, 3)), p, h, false);
+}
+
+void rounded_cylinder(TriangleMesh& m, const double* s, double r, double h) {
+  const dvec3 a = vec_at(s, 0), b = vec_at(s, 3);
+  const double rho = s[6], len = glm::length(b - a);
+  Profile p{kRowSpacing * h, {}, {}};
+  p.line(0.0, len + r, rho, len + r);
+  p.arc(rho, len, r, 0.0, 0.5 * kPi);
+  p.line(rho + r, len, rho + r, 0.0);
+  p.arc(rho, 0.0, r, 0.5 * kPi, kPi);
+  p.line(rho, -r, 0.0, -r);
+  p.rho.back() = 0.0;
+  revolve(m, frame_around(a, (b - a) / len), p, h, false);
+}
+
+void cone_sphere(TriangleMesh& m, const double* s, double r, double h) {
+  const dvec3 a = vec_at(s, 0), b = vec_at(s, 3);
+  const double ra = s[6] + r, rb = s[7] + r, len = glm::length(b - a);
+  if (len <= std::abs(ra - rb)) return ra >= rb ? sphere(m, a, ra, h) : sphere(m, b, rb, h);
+  // The common tangent's normal leans toward b by alpha, sin(alpha) = (ra - rb) / len; it
+  // touches each sphere at psi = pi/2 - alpha from the axis.
+  const double alpha = std::asin((ra - rb) / len), touch = 0.5 * kPi - alpha;
+  Profile p{kRowSpacing * h, {}, {}};
+  p.arc(0.0, len, rb, 0.0, touch);
+  p.line(rb * std::cos(alpha), len + rb * std::sin(alpha), ra * std::cos(alpha), ra * std::sin(alpha));
+  p.arc(0.0, 0.0, ra, touch, kPi);
+  p.rho.back() = 0.0;
+  revolve(m, frame_around(a, (b - a) / len), p, h, false);
+}
+
+// The triangle's offset as a loop stack around its normal: the top pole at the incentre, flat
+// loops (the triangle shrunk toward the incentre, every sqrt(3)/2 h of inradius), the triangle
+// itself at +r, rim loops (the triangle offset in its plane by r sin(psi), at height r cos(psi):
+// straight runs along the edges, arcs around the corners), the triangle at -r, flat loops, the
+// bottom pole. Flat loops nest strictly inside each other and the triangle is convex, so every
+// zipped triangle is properly oriented.
+void rounded_triangle(TriangleMesh& m, const double* s, double r, double h) {
+  const std::array<dvec3, 3> c = {vec_at(s, 0), vec_at(s, 3), vec_at(s, 6)};
+  std::array<double, 3> len{};
+  for (int i = 0; i < 3; ++i) len[i] = glm::length(c[(i + 1) % 3] - c[i]);
+  const int longest = int(std::max_element(len.begin(), len.end()) - len.begin());
+  const dvec3 cross = glm::cross(c[1] - c[0], c[2] - c[0]);
+  const double area2 = glm::length(cross);
+  // A triangle this flat is its longest edge to within 1e-10 of the mesh's size.
+  if (!(area2 > 1e-10 * len[longest] * (len[longest] + r)))
+    return capsule(m, c[longest], c[(longest + 1) % 3], r, h);
+
+  const dvec3 n = cross / area2;
+  std::array<dvec3, 3> out{};  // outward normal of edge i (c[i] -> c[i+1]) in the plane
+  for (int i = 0; i < 3; ++i) out[i] = glm::normalize(glm::cross(c[(i + 1) % 3] - c[i], n));
+  const double perimeter = len[0] + len[1] + len[2];
+  const dvec3 incentre = (len[1] * c[0] + len[2] * c[1] + len[0] * c[2]) / perimeter;
+  const double inradius = area2 / perimeter, step = kRowSpacing * h;
+
+  std::vector<Loop> loops;
+  auto flat_loop = [&](double scale, double z) {
+    Loop loop{vertex_count(m), 0};
+    for (int i = 0; i < 3; ++i) {
+      const dvec3 p = incentre + scale * (c[i] - incentre), q = incentre + scale * (c[(i + 1) % 3] - incentre);
+      const int cells = cells_for(scale * len[i], h, 1);
+      for (int j = 0; j < cells; ++j) m.positions.push_back(p + (q - p) * (double(j) / cells) + z * n);
+    }
+    loop.count = vertex_count(m) - loop.first;
+    loops.push_back(loop);
+  };
+  auto rim_loop = [&](double offset, double z) {
+    Loop loop{vertex_count(m), 0};
+    for (int i = 0; i < 3; ++i) {
+      const dvec3 from = out[(i + 2) % 3], to = out[i], side = glm::cross(n, from);
+      const double turn = std::atan2(glm::dot(glm::cross(from, to), n), glm::dot(from, to));
+      // A corner of almost 180 degrees gets no arc: its two ends would nearly coincide.
+      const int arc_cells = turn * offset > 1e-6 * h ? cells_for(turn * offset, h, 1) : 0;
+      for (int j = 0; j < arc_cells; ++j) {
+        const double phi = turn * (double(j) / arc_cells);
+        m.positions.push_back(c[i] + offset * (std::cos(phi) * from + std::sin(phi) * side) + z * n);
+      }
+      const dvec3 edge = c[(i + 1) % 3] - c[i];
+      const int cells = cells_for(len[i], h, 1);
+      for (int j = 0; j < cells; ++j) m.positions.push_back(c[i] + offset * to + edge * (double(j) / cells) + z * n);
+    }
+    loop.count = vertex_count(m) - loop.first;
+    loops.push_back(loop);
+  };
+  auto pole = [&](double z) {
+    loops.push_back({vertex_count(m), 1});
+    m.positions.push_back(incentre + z * n);
+  };
+
+  const int rings = cells_for(inradius, step, 1), rows = cells_for(kPi * r, step, 2);
+  pole(r);
+  for (int j = 1; j < rings; ++j) flat_loop(double(j) / rings, r);
+  flat_loop(1.0, r);
+  for (int j = 1; j < rows; ++j) {
+    const double psi = kPi * (double(j) / rows);
+    rim_loop(r * std::sin(psi), r * std::cos(psi));
+  }
+  flat_loop(1.0, -r);
+  for (int j = rings - 1; j >= 1; --j) flat_loop(double(j) / rings, -r);
+  pole(-r);
+  // The faces (pole to triangle) are zipped apart from the rim so that their flips can work on
+  // their own triangles.
+  const std::span<const Loop> stack(loops);
+  const std::size_t face = std::size_t(rings) + 1, t0 = m.triangles.size();
+  zip_stack(m, stack.first(face), false);
+  const std::size_t t1 = m.triangles.size();
+  zip_stack(m, stack.subspan(face - 1, stack.size() - 2 * (face - 1)), false);
+  const std::size_t t2 = m.triangles.size();
+  zip_stack(m, stack.last(face), false);
+  flip_flat_quads(m, t0, t1);
+  flip_flat_quads(m, t2, m.triangles.size());
+}
+
+// The curve's polyline, with its cumulative arc length and unit tangents at its points (the
+// mean of the two segments' directions; a segment's at the ends).
+struct Polyline {
+  std::vector<dvec3> points, tangents;
+  std::vector<double> arc;
+
+  explicit Polyline(const double* s) {
+    const auto count = static_cast<std::size_t>(s[0]);
+    points.resize(count);
+    arc.resize(count);
+    for (std::size_t i = 0; i < count; ++i) {
+      points[i] = vec_at(s + 1, static_cast<int>(3 * i));
+      arc[i] = i == 0 ? 0.0 : arc[i - 1] + glm::length(points[i] - points[i - 1]);
+    }
+  }
+  double length() const { return arc.empty() ? 0.0 : arc.back(); }
+  // Fills `tangents`; needs a positive length.
+  void find_tangents() {
+    const std::size_t count = points.size();
+    // Segment directions; a repeated point borrows its neighbour's.
+    std::vector<dvec3> dir(count - 1, dvec3(0.0));
+    for (std::size_t i = 0; i + 1 < count; ++i)
+      if (arc[i + 1] > arc[i]) dir[i] = glm::normalize(points[i + 1] - points[i]);
+    for (std::size_t i = 1; i < dir.size(); ++i)
+      if (dir[i] == dvec3(0.0)) dir[i] = dir[i - 1];
+    for (std::size_t i = dir.size() - 1; i-- > 0;)
+      if (dir[i] == dvec3(0.0)) dir[i] = dir[i + 1];
+    tangents.resize(count);
+    tangents[0] = dir.front();
+    tangents[count - 1] = dir.back();
+    for (std::size_t i = 1; i + 1 < count; ++i) {
+      const dvec3 mean = dir[i - 1] + dir[i];
+      tangents[i] = glm::dot(mean, mean) > 1e-24 ? glm::normalize(mean) : dir[i];
+    }
+  }
+  std::size_t segment_at(double t) const {
+    return std::min<std::size_t>(std::upper_bound(arc.begin(), arc.end(), t) - arc.begin(), arc.size() - 1) - 1;
+  }
+  // The point at arc length t, clamped to the ends.
+  dvec3 at(double t) const {
+    if (points.size() == 1 || t <= 0.0) return points.front();
+    const std::size_t i = segment_at(t);
+    const double span = arc[i + 1] - arc[i];
+    return span > 0.0 ? points[i] + (points[i + 1] - points[i]) * std::min((t - arc[i]) / span, 1.0) : points[i];
+  }
+  // The tangent at arc length t, interpolated between the points' tangents: it turns gradually
+  // along each segment, as the spline's does, so rings spaced finer than the polyline do not
+  // jump at its corners.
+  dvec3 tangent_at(double t) const {
+    if (t <= 0.0) return tangents.front();
+    const std::size_t i = segment_at(t);
+    const double span = arc[i + 1] - arc[i];
+    const double u = span > 0.0 ? std::clamp((t - arc[i]) / span, 0.0, 1.0) : 0.0;
+    const dvec3 mixed = (1.0 - u) * tangents[i] + u * tangents[i + 1];
+    return glm::dot(mixed, mixed) > 1e-24 ? glm::normalize(mixed) : tangents[i + 1];
+  }
+  // Segments [first, last) that reach within `reach` of arc length t.
+  std::pair<std::size_t, std::size_t> window(double t, double reach) const {
+    const auto lo = std::lower_bound(arc.begin(), arc.end(), t - reach) - arc.begin();
+    const auto hi = std::upper_bound(arc.begin(), arc.end(), t + reach) - arc.begin();
+    const std::size_t first = lo > 0 ? std::size_t(lo) - 1 : 0;
+    const std::size_t last = std::clamp<std::size_t>(std::size_t(hi), first + 1, points.size() - 1);
+    return {first, last};
+  }
+  // Squared distance from x to segment i, and the vector from its closest point to x.
+  double distance2(std::size_t i, const dvec3& x, dvec3& from_segment) const {
+    const dvec3 a = points[i], ab = points[i + 1] - a;
+    const double len2 = glm::dot(ab, ab);
+    const double t = len2 > 0.0 ? std::clamp(glm::dot(x - a, ab) / len2, 0.0, 1.0) : 0.0;
+    from_segment = x - (a + t * ab);
+    return glm::dot(from_segment, from_segment);
+  }
+};
+
+// Distance from x to the segments listed in `segments`, and the unit direction from the
+// closest point.
+double distance_to(const Polyline& line, std::span<const std::uint32_t> segments, const dvec3& x, dvec3& away) {
+  double best2 = std::numeric_limits<double>::infinity();
+  dvec3 nearest(0.0), d;
+  for (std::uint32_t i : segments) {
+    const double dist2 = line.distance2(i, x, d);
+    if (dist2 < best2) best2 = dist2, nearest = d;
+  }
+  const double best = std::sqrt(best2);
+  away = best > 0.0 ? nearest / best : dvec3(0.0);
+  return best;
+}
+
+// Moves x = o + t ray to where its distance to `segments` is r, from t = r (x's start: o is a
+// point of the polyline at distance r from x). The distance along the ray is 0 at o and at most
+// r at t = r, so the crossing lies beyond: Newton steps, kept inside the bracket found so far,
+// bisection when they leave it. Returns false when no crossing lies within 4 r (a fold).
+bool solve_along_ray(const Polyline& line, std::span<const std::uint32_t> segments, const dvec3& o,
+                     const dvec3& ray, double r, double& t) {
+  const double tolerance = 1e-14 * (r + glm::length(o));
+  double lo = 0.0, hi = std::numeric_limits<double>::infinity();
+  t = r;
+  for (int iteration = 0; iteration < 100; ++iteration) {
+    dvec3 away;
+    const double f = distance_to(line, segments, o + t * ray, away) - r;
+    if (std::abs(f) <= tolerance) break;
+    (f < 0.0 ? lo : hi) = t;
+    const double slope = glm::dot(away, ray);
+    double next = slope > 1e-3 ? t - f / slope : std::numeric_limits<double>::quiet_NaN();
+    if (!(next > lo && next < hi)) next = std::isfinite(hi) ? 0.5 * (lo + hi) : 2.0 * t;
+    if (next > 4.0 * r) return false;
+    if (next == t) break;
+    t = next;
+  }
+  return true;
+}
+
+// Moves vertex x, at distance r from o on the polyline, along the ray from o to the distance r
+// from the window's segments. Newton only needs the segments that can be nearest: those within
+// `margin` of the nearest at x stay candidates as long as the vertex moves less than margin / 4
+// (distances are 1-Lipschitz); a longer move is redone against the whole window.
+void push_to_offset(dvec3& x, const dvec3& o, double r, const Polyline& line, std::span<const std::uint32_t> window,
+                    std::vector<double>& dist2, std::vector<std::uint32_t>& candidates) {
+  const dvec3 ray = glm::normalize(x - o);
+  const double margin = 0.1 * r;
+  dist2.resize(window.size());
+  double nearest2 = std::numeric_limits<double>::infinity();
+  dvec3 d;
+  for (std::size_t k = 0; k < window.size(); ++k) nearest2 = std::min(nearest2, dist2[k] = line.distance2(window[k], x, d));
+  const double keep = (std::sqrt(nearest2) + margin) * (std::sqrt(nearest2) + margin);
+  candidates.clear();
+  for (std::size_t k = 0; k < window.size(); ++k)
+    if (dist2[k] <= keep) candidates.push_back(window[k]);
+  double t = r;
+  bool found = solve_along_ray(line, candidates, o, ray, r, t);
+  if (!found || std::abs(t - r) > 0.25 * margin) found = solve_along_ray(line, window, o, ray, r, t);
+  if (found) x = o + t * ray;
+}
+
+// A tube along the curve: the start cap's rings, one ring every sqrt(3)/2 h of arc length, the
+// end cap's rings; frames carried along by double reflection so the tube does not twist.
+void tube(TriangleMesh& m, const double* s, double r, double h) {
+  Polyline line(s);
+  const double length = line.length();
+  if (line.points.size() < 2 || !(length > 1e-12 * r)) return sphere(m, line.points.front(), r, h);
+  line.find_tangents();
+
+  // Where the curvature radius stays above r, the polyline within r of a vertex lies within
+  // pi r of arc length of its ring's centre.
+  const double step = kRowSpacing * h, reach = kPi * r + 2.0 * h;
+  const int spans = cells_for(length, step, 1);
+  std::vector<double> where(spans + 1);
+  std::vector<dvec3> centre(spans + 1), tangent(spans + 1), normal(spans + 1);
+  for (int k = 0; k <= spans; ++k) {
+    where[k] = k == spans ? length : length * (double(k) / spans);
+    centre[k] = line.at(where[k]);
+    tangent[k] = line.tangent_at(where[k]);
+  }
+  normal[0] = frame_around(centre[0], tangent[0]).u;
+  for (int k = 0; k < spans; ++k) {
+    // Double reflection: reflect the frame in the bisector plane of the chord, then in the one
+    // that maps the reflected tangent onto the next tangent.
+    const dvec3 v1 = centre[k + 1] - centre[k];
+    const double c1 = glm::dot(v1, v1);
+    dvec3 rl = normal[k], tl = tangent[k];
+    if (c1 > 0.0) {
+      rl -= (2.0 / c1) * glm::dot(v1, rl) * v1;
+      tl -= (2.0 / c1) * glm::dot(v1, tl) * v1;
+    }
+    const dvec3 v2 = tangent[k + 1] - tl;
+    const double c2 = glm::dot(v2, v2);
+    if (c2 > 0.0) rl -= (2.0 / c2) * glm::dot(v2, rl) * v2;
+    normal[k + 1] = glm::normalize(rl - glm::dot(rl, tangent[k + 1]) * tangent[k + 1]);
+  }
+
+  // The stack runs from the start's pole to the end's: its "top" is -tangent, and rings turn
+  // counter-clockwise around it (u x v = cross(T x U, U) = -T).
+  std::vector<Loop> loops;
+  std::vector<int> loop_centre;
+  auto ring = [&](int k, double rho, double z) {
+    const Frame f{centre[k], -tangent[k], glm::cross(tangent[k], normal[k]), normal[k]};
+    loops.push_back(add_ring(m, f, rho, z, h, loops.size() % 2 == 1));
+    loop_centre.push_back(k);
+  };
+  const int cap_rows = cells_for(0.5 * kPi * r, step, 1);
+  ring(0, 0.0, r);
+  for (int j = 1; j < cap_rows; ++j) {
+    const double psi = 0.5 * kPi * (double(j) / cap_rows);
+    ring(0, r * std::sin(psi), r * std::cos(psi));
+  }
+  for (int k = 0; k <= spans; ++k) ring(k, r, 0.0);
+  for (int j = 1; j < cap_rows; ++j) {
+    const double psi = 0.5 * kPi * (1.0 + double(j) / cap_rows);
+    ring(spans, r * std::sin(psi), r * std::cos(psi));
+  }
+  ring(spans, 0.0, -r);
+
+  // Onto the polyline's offset, loop by loop in parallel (each vertex on its own: deterministic).
+  tbb::parallel_for(tbb::blocked_range<std::size_t>(0, loops.size(), 8), [&](const auto& range) {
+    std::vector<std::uint32_t> window, candidates;
+    std::vector<double> dist2;
+    for (std::size_t l = range.begin(); l != range.end(); ++l) {
+      const int k = loop_centre[l];
+      const auto [first, last] = line.window(where[k], reach);
+      window.resize(last - first);
+      for (std::size_t i = first; i < last; ++i) window[i - first] = static_cast<std::uint32_t>(i);
+      for (std::uint32_t v = loops[l].first; v < loops[l].first + loops[l].count; ++v)
+        push_to_offset(m.positions[v], centre[k], r, line, window, dist2, candidates);
+    }
+  });
+  zip_stack(m, loops, false);
+}
+
+// An upper bound of the offset surface's area.
+double area_bound(NodeKind kind, const double* s, double r) {
+  const double ball = 4.0 * kPi * r * r;
+  switch (kind) {
+    case NodeKind::Point: return ball;
+    case NodeKind::Segment: return 2.0 * kPi * r * glm::length(vec_at(s, 3) - vec_at(s, 0)) + ball;
+    case NodeKind::Circle: return 4.0 * kPi * kPi * s[6] * r + ball;
+    case NodeKind::Disc: return 2.0 * kPi * s[6] * s[6] + 2.0 * kPi * kPi * s[6] * r + ball;
+    case NodeKind::Triangle: {
+      const dvec3 a = vec_at(s, 0), b = vec_at(s, 3), c = vec_at(s, 6);
+      const double perimeter = glm::length(b - a) + glm::length(c - b) + glm::length(a - c);
+      return glm::length(glm::cross(b - a, c - a)) + kPi * r * perimeter + ball;
+    }
+    case NodeKind::Curve: return 2.0 * kPi * r * Polyline(s).length() + ball;
+    case NodeKind::Box: {
+      const dvec3 e = vec_at(s, 3) - vec_at(s, 0);
+      return 2.0 * (e.x * e.y + e.y * e.z + e.z * e.x) + kPi * r * (e.x + e.y + e.z) + ball;
+    }
+    case NodeKind::Cylinder: {
+      const double rho = s[6], len = glm::length(vec_at(s, 3) - vec_at(s, 0));
+      return 2.0 * kPi * rho * rho + 2.0 * kPi * (rho + r) * len + 2.0 * kPi * kPi * (rho + r) * r + ball;
+    }
+    case NodeKind::ConeSphere: {
+      const double ra = s[6] + r, rb = s[7] + r, len = glm::length(vec_at(s, 3) - vec_at(s, 0));
+      return 4.0 * kPi * (ra * ra + rb * rb) + kPi * (ra + rb) * len;
+    }
+    default: return 0.0;
+  }
+}
+
+// How many triangles the mesh will have, at most about: near-equilateral triangles of side h
+// cover sqrt(3)/4 h^2 each and the lattice's right triangles h^2 / 2, so 2.5 A / h^2 bounds both
+// with room for rounding the cell counts up; when r is far below h, rings and strips keep at
+// least 3 cells around, which the length term bounds.
+double triangle_estimate(NodeKind kind, const double* s, double r, double h) {
+  const double length = kind == NodeKind::Curve ? Polyline(s).length() : kPi * glm::length(skeleton_bounds(kind, s).size());
+  return 2.5 * area_bound(kind, s, r) / (h * h) + 32.0 * length / h + 64.0;
+}
+
+}  // namespace
+
+bool has_sweep_mesh(NodeKind kind) { return kind_family(kind) == Family::Primitive; }
+
+TriangleMesh sweep_mesh(const Graph& graph, NodeId node, double threshold, double precision) {
+  if (node >= graph.size()) throw std::invalid_argument("sweep_mesh: node " + std::to_string(node) + " is not in the graph");
+  const NodeKind kind = graph.kind[node];
+  if (!has_sweep_mesh(kind))
+    throw std::invalid_argument("sweep_mesh: " + graph.label(node) + " is not a skeletal primitive");
+  if (!(std::isfinite(precision) && precision > 0.0))
+    throw std::invalid_argument("sweep_mesh: precision must be a finite number > 0");
+  if (!(std::isfinite(threshold) && threshold > 0.0))
+    throw std::invalid_argument("sweep_mesh: threshold must be a finite number > 0");
+
+  const auto params = graph.params_of(node);
+  const double r = primitive_r0(params[kPrimR], params[kPrimF], threshold);
+  TriangleMesh mesh;
+  if (!(r > 0.0)) return mesh;
+  const double* s = graph.skeleton_of(node);
+
+  const double estimate = triangle_estimate(kind, s, r, precision);
+  if (!(estimate <= kSweepMaxTriangles))
+    throw PolygonizeError("sweep_mesh: precision " + std::to_string(precision) + " would need about " +
+                          std::to_string(estimate) + " triangles for " + graph.label(node) +
+                          " (at most 50 million)");
+
+  switch (kind) {
+    case NodeKind::Point: sphere(mesh, vec_at(s, 0), r, precision); break;
+    case NodeKind::Segment: capsule(mesh, vec_at(s, 0), vec_at(s, 3), r, precision); break;
+    case NodeKind::Circle: torus(mesh, s, r, precision); break;
+    case NodeKind::Disc: rounded_disc(mesh, s, r, precision); break;
+    case NodeKind::Triangle: rounded_triangle(mesh, s, r, precision); break;
+    case NodeKind::Curve: tube(mesh, s, r, precision); break;
+    case NodeKind::Box: {
+      const dvec3 lo = vec_at(s, 0), hi = vec_at(s, 3);
+      rounded_box(mesh, 0.5 * (lo + hi), 0.5 * (hi - lo), r, precision);
+      break;
+    }
+    case NodeKind::Cylinder: rounded_cylinder(mesh, s, r, precision); break;
+    case NodeKind::ConeSphere: cone_sphere(mesh, s, r, precision); break;
+    default: break;
+  }
+  return mesh;
+}
+
+}  // namespace ht

@@ -1,0 +1,82 @@
+// Per-node meshing strategies: leaves share their mesh, primitives sweep, warps warp their
+// child's mesh and split stretched edges with new vertices on the warped surface, operators
+// polygonize; every result is watertight.
+#include "meshers/mesh_checks.hpp"
+#include "meshers/mesh_node.hpp"
+#include "nodes/mesh_leaf.hpp"
+#include "runtime/builder.hpp"
+#include "runtime/tape_eval.hpp"
+#include "tests/support/random_tree.hpp"
+
+#include <glm/geometric.hpp>
+#include <glm/gtc/matrix_transform.hpp>
+#include <gtest/gtest.h>
+
+using namespace ht;
+using glm::dvec3;
+
+namespace {
+constexpr double kT = 0.5;
+}
+
+TEST(MeshNode, LeavesShareTheirMesh) {
+  Builder b(kT);
+  const auto leaf = MeshLeaf::load(test::cgal_mesh("eight.off"));
+  const NodeId m = b.mesh(leaf, {0.05});
+  const Tree t = b.build(m);
+  std::vector<MeshLogEntry> log;
+  const auto mesh = mesh_node(t, m, 0.02, MeshStrategy::Auto, &log);
+  EXPECT_EQ(mesh.get(), leaf->surface().get());  // the same object: not copied
+  ASSERT_EQ(log.size(), 1u);
+  EXPECT_EQ(log[0].strategy, "shared leaf mesh");
+}
+
+TEST(MeshNode, WarpedMeshesStayWatertightAndOnTheSurface) {
+  for (int kind = 0; kind < 4; ++kind) {
+    Builder b(kT);
+    const NodeId child = b.segment({-0.6, 0, 0}, {0.6, 0, 0}, {0.5});
+    NodeId w;
+    if (kind == 0)
+      w = b.affine(child, glm::scale(glm::dmat4(1.0), dvec3(3.0, 1.0, 1.0)));  // stretches triangles 3x
+    else if (kind == 1)
+      w = b.twist(child, Axis::X, {0, 0, 0}, 2.5);
+    else if (kind == 2)
+      w = b.taper(child, Axis::X, {0, 0, 0}, -0.8, 0.8, 0.5, 2.0);
+    else
+      w = b.bend(child, Axis::X, {0, 0, 0}, -0.8, 0.8, 0.9);
+    const Tree t = b.build(w);
+    const double h = 0.03;
+    std::vector<MeshLogEntry> log;
+    const auto mesh = mesh_node(t, w, h, MeshStrategy::Auto, &log);
+    MeshChecks c = check_mesh(*mesh);
+    measure_surface_error(*mesh, t.evaluator(), kT, c);
+    EXPECT_TRUE(c.watertight()) << kind << ": boundary " << c.boundary_edges << " degenerate " << c.degenerate_triangles;
+    EXPECT_EQ(c.euler, 2) << kind;
+    EXPECT_LT(c.vertex_error_max, 0.02 * h) << kind;
+    // No edge much longer than the target after remeshing.
+    double longest = 0;
+    for (const auto& tri : mesh->triangles)
+      for (int k = 0; k < 3; ++k) longest = std::max(longest, glm::length(mesh->positions[tri[k]] - mesh->positions[tri[(k + 1) % 3]]));
+    EXPECT_LT(longest, 1.5 * h * 1.01) << kind;
+    ASSERT_EQ(log.size(), 2u);
+    EXPECT_EQ(log[0].strategy, "sweep");
+  }
+}
+
+TEST(MeshNode, OperatorsPolygonizeAndHintsWin) {
+  Builder b(kT);
+  const NodeId a = b.point({0, 0, 0}, {1.0});
+  const NodeId c = b.point({0.5, 0, 0}, {1.0});
+  const NodeId blend = b.blend({a, c});
+  const NodeId warped = b.affine(blend, glm::translate(glm::dmat4(1.0), dvec3(1, 0, 0)));
+  b.set_mesher(a, MesherHint::Global);
+  const Tree t = b.build(warped);
+  std::vector<MeshLogEntry> log;
+  const auto mesh = mesh_node(t, warped, 0.04, MeshStrategy::Auto, &log);
+  EXPECT_TRUE(check_mesh(*mesh).watertight());
+  ASSERT_EQ(log.size(), 2u);
+  EXPECT_NE(log[0].strategy.find("global"), std::string::npos);
+  log.clear();
+  mesh_node(t.subtree(a), a, 0.04, MeshStrategy::Auto, &log);
+  EXPECT_EQ(log[0].strategy, "global");  // the node's own hint
+}
