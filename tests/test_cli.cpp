@@ -191,3 +191,27 @@ TEST(Cli, ScenesWithFfdEvaluateAndMesh) {
   EXPECT_NE(m.out.find("closed manifold"), std::string::npos) << m.out;
   std::filesystem::remove_all(dir);
 }
+
+TEST(Cli, MeshStrategiesAreLoggedPerNode) {
+  const auto dir = test::temp_dir("cli-strategy");
+  const std::string s = write_scene(dir, "s.json", R"({"hybridtree": 1, "mesher": {"precision": 0.05}, "root":
+      {"type": "taper", "axis": "z", "range": [-0.5, 0.5], "scale": [1, 0.3],
+       "child": {"type": "cylinder", "a": [0,0,-0.5], "b": [0,0,0.5], "cylinder_radius": 0.3, "radius": 0.4}}})");
+  for (const char* strategy : {"auto", "global"}) {
+    const auto r = test::run_cli("mesh " + s + " -o " + (dir / "m.ply").string() + " --strategy " + strategy +
+                                 " --stats-json " + (dir / "st.json").string());
+    ASSERT_EQ(r.code, 0) << r.err;
+    std::ifstream in(dir / "st.json");
+    const auto j = nlohmann::json::parse(in);
+    EXPECT_EQ(j["checks"]["watertight"], true) << strategy;
+    EXPECT_EQ(j["strategy"], strategy);
+    if (std::string(strategy) == "auto") {
+      ASSERT_EQ(j["nodes"].size(), 2u);
+      EXPECT_EQ(j["nodes"][0]["strategy"], "sweep");
+      EXPECT_NE(j["nodes"][1]["strategy"].get<std::string>().find("warped child"), std::string::npos);
+    } else {
+      EXPECT_EQ(j["nodes"][0]["strategy"], "global");
+    }
+  }
+  std::filesystem::remove_all(dir);
+}

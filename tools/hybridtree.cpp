@@ -7,6 +7,7 @@
 #include "meshers/ffd.hpp"
 #include "meshers/mesh_checks.hpp"
 #include "meshers/mesh_io.hpp"
+#include "meshers/mesh_node.hpp"
 #include "meshers/polygonize.hpp"
 #include "nodes/mesh_leaf.hpp"
 #include "runtime/scene.hpp"
@@ -201,7 +202,7 @@ int cmd_eval(const std::string& scene, const std::string& points_file, bool grad
 }
 
 struct MeshArgs {
-  std::string scene, out, strategy = "auto", stats_json;
+  std::string scene, out, strategy, stats_json;  // strategy: empty = the scene's
   double precision = 0.0, memory_gib = 4.0;
   int threads = 0;
 };
@@ -232,8 +233,6 @@ void write_text_atomically(const std::string& file, const std::string& text) {
 int cmd_mesh(const MeshArgs& a) {
   if (!ht::supported_mesh_extension(a.out))
     throw InputError(a.out + ": unsupported output extension (use .ply, .obj, .off or .stl)");
-  if (a.strategy != "auto" && a.strategy != "global")
-    throw InputError("--strategy " + a.strategy + ": only the global polygonizer exists yet (auto picks it)");
   using clock = std::chrono::steady_clock;
   const auto t0 = clock::now();
   const ht::Tree loaded = ht::load_scene(a.scene);
@@ -244,11 +243,25 @@ int cmd_mesh(const MeshArgs& a) {
   options.precision = h;
   options.memory_budget = static_cast<std::size_t>(a.memory_gib * double(1u << 30));
   options.progress = progress_bar();
+  std::string strategy_name = a.strategy;
+  if (strategy_name.empty())
+    strategy_name = tree.mesher_settings().strategy == ht::MesherHint::Global  ? "global"
+                    : tree.mesher_settings().strategy == ht::MesherHint::Local ? "local"
+                                                                                : "auto";
+  const ht::MeshStrategy strategy = strategy_name == "global" ? ht::MeshStrategy::Global
+                                    : strategy_name == "local" ? ht::MeshStrategy::Local
+                                                               : ht::MeshStrategy::Auto;
   ht::PolygonizeStats stats;
+  std::vector<ht::MeshLogEntry> log;
   const auto t1 = clock::now();
   ht::TriangleMesh mesh;
   try {
-    mesh = ht::polygonize(tree.graph_ptr(), tree.root(), tree.threshold(), options, &stats);
+    if (strategy == ht::MeshStrategy::Global) {
+      mesh = ht::polygonize(tree.graph_ptr(), tree.root(), tree.threshold(), options, &stats);
+      log.push_back({tree.root(), "global", mesh.triangles.size(), 0.0});
+    } else {
+      mesh = *ht::mesh_node(tree, tree.root(), h, strategy, &log, &options);
+    }
   } catch (const ht::CompileError& e) {
     throw InputError(a.scene + ": " + e.what());
   } catch (const ht::PolygonizeError& e) {
@@ -263,15 +276,22 @@ int cmd_mesh(const MeshArgs& a) {
   const auto t3 = clock::now();
   ht::write_mesh(mesh, a.out);
   const double write_s = std::chrono::duration<double>(clock::now() - t3).count();
-  std::printf("%s: %zu triangles, %zu vertices, precision %g, %.3f s meshing (%zu of %zu bricks), %s, genus %ld\n",
-              a.out.c_str(), checks.triangles, checks.vertices, h, mesh_s, stats.bricks_active, stats.bricks_total,
+  std::printf("%s: %zu triangles, %zu vertices, precision %g, %.3f s meshing (%s at the root), %s, genus %ld\n",
+              a.out.c_str(), checks.triangles, checks.vertices, h, mesh_s, log.empty() ? "?" : log.back().strategy.c_str(),
               checks.watertight() ? "closed manifold" : "NOT watertight", checks.genus);
   if (!a.stats_json.empty()) {
     nlohmann::json j;
     j["scene"] = a.scene;
     j["output"] = a.out;
     j["precision"] = h;
-    j["strategy"] = "global";
+    j["strategy"] = strategy_name;
+    nlohmann::json nodes = nlohmann::json::array();
+    for (const ht::MeshLogEntry& e : log)
+      nodes.push_back({{"node", tree.graph().label(e.node)},
+                       {"strategy", e.strategy},
+                       {"triangles", e.triangles},
+                       {"seconds", e.seconds}});
+    j["nodes"] = nodes;
     j["triangles"] = checks.triangles;
     j["vertices"] = checks.vertices;
     j["checks"] = {{"closed", checks.closed()},
@@ -332,7 +352,10 @@ int main(int argc, char** argv) {
   mesh_cmd->add_option("-o,--output", mesh_args.out, "Output mesh: .ply, .obj, .off or .stl")->required();
   mesh_cmd->add_option("--precision", mesh_args.precision, "Target edge length (default: the scene's, else 1/100 of its size)")
       ->check(CLI::PositiveNumber);
-  mesh_cmd->add_option("--strategy", mesh_args.strategy, "auto or global");
+  mesh_cmd->add_option("--strategy", mesh_args.strategy,
+                       "auto (per node: sweep, shared leaf, warped child, global for operators), global or local "
+                       "(default: the scene's mesher.strategy)")
+      ->check(CLI::IsMember({"auto", "global", "local"}));
   mesh_cmd->add_option("--threads", mesh_args.threads, "Worker threads (default: all cores)")->check(CLI::Range(1, 1024));
   mesh_cmd->add_option("--stats-json", mesh_args.stats_json, "Write triangles, checks and seconds per stage to FILE");
   mesh_cmd->add_option("--memory-budget", mesh_args.memory_gib, "GiB the mesher may use (default 4)")->check(CLI::PositiveNumber);
