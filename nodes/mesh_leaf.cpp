@@ -7,6 +7,7 @@
 // each shell from its nesting depth and signed volume -> angle-weighted pseudo-normals.
 #include "nodes/mesh_leaf.hpp"
 
+#include "nodes/primitives.hpp"
 #include "nodes/trimesh.hpp"
 
 #include <OpenMesh/Core/IO/MeshIO.hh>
@@ -420,60 +421,9 @@ void fill_holes(const std::string& name, std::vector<glm::dvec3>& pos, std::vect
 // ---------------------------------------------------------------------------------------------
 // Geometry in double.
 
-// Closest point of triangle (a, b, c) to p and the feature it lies on, by the Voronoi regions of
-// the vertices, edges and face. Features: 0 face, 1 + k edge k (corner k to k+1), 4 + k vertex k.
-struct Nearest {
-  glm::dvec3 point;
-  int feature;
-};
-constexpr int kFace = 0, kEdge = 1, kVertex = 4;
-
-Nearest nearest_on_segment(const glm::dvec3& p, const glm::dvec3& a, const glm::dvec3& b, int k) {
-  const glm::dvec3 ab = b - a;
-  const double len2 = glm::dot(ab, ab);
-  const double s = len2 > 0 ? glm::dot(p - a, ab) / len2 : 0.0;
-  if (s <= 0) return {a, kVertex + k};
-  if (s >= 1) return {b, kVertex + (k + 1) % 3};
-  return {a + s * ab, kEdge + k};
-}
-
-Nearest nearest_on_triangle(const glm::dvec3& p, const glm::dvec3& a, const glm::dvec3& b,
-                            const glm::dvec3& c) {
-  const glm::dvec3 ab = b - a, ac = c - a, ap = p - a;
-  const double d1 = glm::dot(ab, ap), d2 = glm::dot(ac, ap);
-  if (d1 <= 0 && d2 <= 0) return {a, kVertex + 0};
-  const glm::dvec3 bp = p - b;
-  const double d3 = glm::dot(ab, bp), d4 = glm::dot(ac, bp);
-  if (d3 >= 0 && d4 <= d3) return {b, kVertex + 1};
-  const double vc = d1 * d4 - d3 * d2;
-  if (vc <= 0 && d1 >= 0 && d3 <= 0) {
-    const double den = d1 - d3;  // |ab|^2; zero only if a and b coincide
-    return {den > 0 ? a + ab * (d1 / den) : a, kEdge + 0};
-  }
-  const glm::dvec3 cp = p - c;
-  const double d5 = glm::dot(ab, cp), d6 = glm::dot(ac, cp);
-  if (d6 >= 0 && d5 <= d6) return {c, kVertex + 2};
-  const double vb = d5 * d2 - d1 * d6;
-  if (vb <= 0 && d2 >= 0 && d6 <= 0) {
-    const double den = d2 - d6;
-    return {den > 0 ? a + ac * (d2 / den) : a, kEdge + 2};
-  }
-  const double va = d3 * d6 - d5 * d4;
-  if (va <= 0 && d4 - d3 >= 0 && d5 - d6 >= 0) {
-    const double den = (d4 - d3) + (d5 - d6);
-    return {den > 0 ? b + (c - b) * ((d4 - d3) / den) : b, kEdge + 1};
-  }
-  const double sum = va + vb + vc;
-  if (sum > 0) return {a + ab * (vb / sum) + ac * (vc / sum), kFace};
-  // A zero-area triangle has no face region: the nearest point is on one of its edges.
-  Nearest best = nearest_on_segment(p, a, b, 0);
-  double bd = glm::dot(p - best.point, p - best.point);
-  for (const Nearest& n : {nearest_on_segment(p, b, c, 1), nearest_on_segment(p, c, a, 2)}) {
-    const double d = glm::dot(p - n.point, p - n.point);
-    if (d < bd) bd = d, best = n;
-  }
-  return best;
-}
+// Closest points on triangles come from nodes/primitives.hpp, with the feature they lie on.
+using Nearest = TrianglePoint;
+constexpr int kFace = kTriangleFace, kEdge = kTriangleEdge, kVertex = kTriangleVertex;
 
 glm::dvec3 unit_or_zero(const glm::dvec3& v) {
   const double l = glm::length(v);
@@ -932,7 +882,7 @@ bool point_query_visit(RTCPointQueryFunctionArguments* args) {
   const double reach = rec.reach + st->best;
   if (glm::dot(to_centre, to_centre) >= reach * reach) return false;
   const std::uint32_t t = rec.tri;
-  const Nearest n = nearest_on_triangle(st->p, rec.a, rec.b, rec.c);
+  const Nearest n = closest_on_triangle(st->p, rec.a, rec.b, rec.c);
   const glm::dvec3 d = st->p - n.point;
   const double d2 = glm::dot(d, d);
   if (!(d2 < st->best2)) return false;

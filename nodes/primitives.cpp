@@ -102,34 +102,8 @@ double distance_to_segment(const glm::dvec3& p, const glm::dvec3& a, const glm::
   return glm::length(p - (a + t * ab));
 }
 
-double distance_to_triangle(const glm::dvec3& p, const glm::dvec3& a, const glm::dvec3& b,
-                            const glm::dvec3& c) {
-  // Walk the Voronoi regions of the vertices, then the edges, then the face. A zero-area
-  // triangle has no face region and its region tests round badly: it is its three edges.
-  const glm::dvec3 ab = b - a, ac = c - a, ap = p - a;
-  const double scale2 = std::max({glm::dot(ab, ab), glm::dot(ac, ac), glm::dot(c - b, c - b)});
-  if (!(glm::length(glm::cross(ab, ac)) > 1e-12 * scale2))
-    return std::min({distance_to_segment(p, a, b), distance_to_segment(p, b, c), distance_to_segment(p, c, a)});
-  const double d1 = glm::dot(ab, ap), d2 = glm::dot(ac, ap);
-  if (d1 <= 0.0 && d2 <= 0.0) return glm::length(ap);
-  const glm::dvec3 bp = p - b;
-  const double d3 = glm::dot(ab, bp), d4 = glm::dot(ac, bp);
-  if (d3 >= 0.0 && d4 <= d3) return glm::length(bp);
-  const double vc = d1 * d4 - d3 * d2;
-  if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) return glm::length(ap - (d1 / (d1 - d3)) * ab);
-  const glm::dvec3 cp = p - c;
-  const double d5 = glm::dot(ab, cp), d6 = glm::dot(ac, cp);
-  if (d6 >= 0.0 && d5 <= d6) return glm::length(cp);
-  const double vb = d5 * d2 - d1 * d6;
-  if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) return glm::length(ap - (d2 / (d2 - d6)) * ac);
-  const double va = d3 * d6 - d5 * d4;
-  if (va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0) {
-    const double w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
-    return glm::length(bp - w * (c - b));
-  }
-  const double denom = va + vb + vc;
-  const double v = vb / denom, w = vc / denom;
-  return glm::length(ap - v * ab - w * ac);
+double distance_to_triangle(const glm::dvec3& p, const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c) {
+  return glm::length(p - closest_on_triangle(p, a, b, c).point);
 }
 
 double skeleton_distance(NodeKind kind, const double* s, const glm::dvec3& p) {

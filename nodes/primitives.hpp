@@ -20,7 +20,10 @@
 #include "nodes/kinds.hpp"
 #include "runtime/aabb.hpp"
 
+#include <glm/geometric.hpp>
 #include <glm/vec3.hpp>
+
+#include <algorithm>
 
 #include <span>
 #include <vector>
@@ -60,6 +63,61 @@ std::vector<glm::dvec3> curve_polyline(std::span<const glm::dvec3> points, doubl
 
 /// The point of the uniform Catmull-Rom spline on span i (0 <= i < n-1) at t in [0, 1].
 glm::dvec3 catmull_rom(std::span<const glm::dvec3> points, std::size_t span, double t);
+
+/// The closest point of triangle (a, b, c) to p and the feature it lies on: kTriangleFace,
+/// kTriangleEdge + k (the edge from corner k to k+1) or kTriangleVertex + k. A zero-area
+/// triangle has no face: its closest point is on one of its edges.
+struct TrianglePoint {
+  glm::dvec3 point;
+  int feature;
+};
+inline constexpr int kTriangleFace = 0, kTriangleEdge = 1, kTriangleVertex = 4;
+
+namespace detail {
+inline TrianglePoint closest_on_segment(const glm::dvec3& p, const glm::dvec3& a, const glm::dvec3& b, int k) {
+  const glm::dvec3 ab = b - a;
+  const double len2 = glm::dot(ab, ab);
+  const double s = len2 > 0 ? glm::dot(p - a, ab) / len2 : 0.0;
+  if (s <= 0) return {a, kTriangleVertex + k};
+  if (s >= 1) return {b, kTriangleVertex + (k + 1) % 3};
+  return {a + s * ab, kTriangleEdge + k};
+}
+}  // namespace detail
+
+// Inline: it is the inner step of every mesh-leaf point query.
+inline TrianglePoint closest_on_triangle(const glm::dvec3& p, const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c) {
+  // Walk the Voronoi regions of the vertices, then the edges, then the face. A zero-area
+  // triangle has no face region and its region tests round badly: it is its three edges.
+  const glm::dvec3 ab = b - a, ac = c - a, ap = p - a;
+  const double scale2 = std::max({glm::dot(ab, ab), glm::dot(ac, ac), glm::dot(c - b, c - b)});
+  const glm::dvec3 n = glm::cross(ab, ac);
+  if (!(glm::dot(n, n) > 1e-24 * scale2 * scale2)) {
+    TrianglePoint best = detail::closest_on_segment(p, a, b, 0);
+    double bd = glm::dot(p - best.point, p - best.point);
+    for (const TrianglePoint& q : {detail::closest_on_segment(p, b, c, 1), detail::closest_on_segment(p, c, a, 2)}) {
+      const double d = glm::dot(p - q.point, p - q.point);
+      if (d < bd) bd = d, best = q;
+    }
+    return best;
+  }
+  const double d1 = glm::dot(ab, ap), d2 = glm::dot(ac, ap);
+  if (d1 <= 0.0 && d2 <= 0.0) return {a, kTriangleVertex + 0};
+  const glm::dvec3 bp = p - b;
+  const double d3 = glm::dot(ab, bp), d4 = glm::dot(ac, bp);
+  if (d3 >= 0.0 && d4 <= d3) return {b, kTriangleVertex + 1};
+  const double vc = d1 * d4 - d3 * d2;
+  if (vc <= 0.0 && d1 >= 0.0 && d3 <= 0.0) return {a + (d1 / (d1 - d3)) * ab, kTriangleEdge + 0};
+  const glm::dvec3 cp = p - c;
+  const double d5 = glm::dot(ab, cp), d6 = glm::dot(ac, cp);
+  if (d6 >= 0.0 && d5 <= d6) return {c, kTriangleVertex + 2};
+  const double vb = d5 * d2 - d1 * d6;
+  if (vb <= 0.0 && d2 >= 0.0 && d6 <= 0.0) return {a + (d2 / (d2 - d6)) * ac, kTriangleEdge + 2};
+  const double va = d3 * d6 - d5 * d4;
+  if (va <= 0.0 && (d4 - d3) >= 0.0 && (d5 - d6) >= 0.0)
+    return {b + ((d4 - d3) / ((d4 - d3) + (d5 - d6))) * (c - b), kTriangleEdge + 1};
+  const double denom = va + vb + vc;
+  return {a + (vb / denom) * ab + (vc / denom) * ac, kTriangleFace};
+}
 
 /// Exact distance helpers, shared with the tests and the meshers.
 double distance_to_segment(const glm::dvec3& p, const glm::dvec3& a, const glm::dvec3& b);
