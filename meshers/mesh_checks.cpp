@@ -160,10 +160,12 @@ MeshChecks check_mesh(const TriangleMesh& mesh) {
 }
 
 void measure_surface_error(const TriangleMesh& mesh, const TapeEvaluator& tape, double T, MeshChecks& c) {
+  std::vector<double> f;
+  std::vector<glm::dvec3> g;
   auto measure = [&](const std::vector<glm::dvec3>& pts, double& max, double& mean) {
     if (pts.empty()) return;
-    std::vector<double> f(pts.size());
-    std::vector<glm::dvec3> g(pts.size());
+    f.resize(pts.size());
+    g.resize(pts.size());
     tape.gradient(pts, f, g);
     double sum = 0;
     max = 0;
@@ -182,6 +184,18 @@ void measure_surface_error(const TriangleMesh& mesh, const TapeEvaluator& tape, 
     centres[t] = (mesh.positions[tri[0]] + mesh.positions[tri[1]] + mesh.positions[tri[2]]) / 3.0;
   }
   measure(centres, c.face_error_max, c.face_error_mean);
+  // The field grows inward, so an outward face normal points against grad f.
+  c.inverted_faces = 0;
+  c.inverted_area = 0;
+  for (std::size_t t = 0; t < centres.size(); ++t) {
+    const auto& tri = mesh.triangles[t];
+    const auto& P = mesh.positions;
+    const glm::dvec3 n = glm::cross(P[tri[1]] - P[tri[0]], P[tri[2]] - P[tri[0]]);
+    if (glm::dot(n, g[t]) > 0) {
+      ++c.inverted_faces;
+      c.inverted_area += 0.5 * glm::length(n);
+    }
+  }
 }
 
 }  // namespace ht

@@ -2,7 +2,7 @@
 //   topology  closed (no boundary edge), edge- and vertex-manifold, consistently oriented,
 //             components, Euler characteristic and genus per component
 //   geometry  degenerate triangles, area, enclosed volume, minimum-angle distribution
-//   surface   |f - T| / |grad f| at vertices and face centres, through a tape
+//   surface   |f - T| / |grad f| at vertices and face centres, inverted faces, through a tape
 #pragma once
 
 #include "meshers/triangle_mesh.hpp"
@@ -31,6 +31,10 @@ struct MeshChecks {
   // Surface error, filled by measure_surface_error(): distance to the isosurface estimated as
   // |f - T| / |grad f|, at vertices and at face centres.
   double vertex_error_max = 0, vertex_error_mean = 0, face_error_max = 0, face_error_mean = 0;
+  /// Triangles whose normal points inward (against -grad f at their centre): folds, or slivers
+  /// too thin for their orientation to matter (their area tells which).
+  std::size_t inverted_faces = 0;
+  double inverted_area = 0;
 
   bool closed() const { return boundary_edges == 0; }
   bool manifold() const { return nonmanifold_edges == 0 && nonmanifold_vertices == 0; }

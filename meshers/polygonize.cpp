@@ -3,6 +3,8 @@
 // tetrahedra (Doi & Koide 1991); interval pruning of implicit surfaces (Duff 1992, libfive).
 #include "meshers/polygonize.hpp"
 
+#include "meshers/features.hpp"
+
 #include "runtime/tape.hpp"
 #include "runtime/tape_eval.hpp"
 
@@ -98,9 +100,12 @@ void classify(const Graph& g, NodeId root, double T, const Grid& grid, glm::ivec
 }
 
 struct EdgeVertex {
-  std::uint64_t key;   // lower grid point * 8 + direction (x = 1, y = 2, z = 4)
+  // Grid-edge vertices: lower grid point * 8 + direction (x = 1, y = 2, z = 4). Feature
+  // vertices (meshers/features.hpp): the cell's lower grid point * 8 (direction 0).
+  std::uint64_t key;
   std::uint32_t brick;
   glm::dvec3 position;
+  glm::vec3 normal;  // outward unit normal where a crease is suspected, else zero
 };
 
 struct BrickOutput {
@@ -238,9 +243,12 @@ TriangleMesh polygonize(std::shared_ptr<const Graph> graph, NodeId root, double 
       ends.push_back({local_index(p), local_index(q)});
       return key;
     };
+    std::vector<std::uint32_t> cell_begin;  // triangles of each cell, x fastest
+    cell_begin.reserve(kCells * kCells * kCells + 1);
     for (int cz = 0; cz < kCells; ++cz)
       for (int cy = 0; cy < kCells; ++cy)
         for (int cx = 0; cx < kCells; ++cx) {
+          cell_begin.push_back(static_cast<std::uint32_t>(out.triangles.size()));
           int mask = 0;
           glm::ivec3 corner[8];
           for (int c = 0; c < 8; ++c) {
@@ -279,6 +287,7 @@ TriangleMesh polygonize(std::shared_ptr<const Graph> graph, NodeId root, double 
             }
           }
         }
+    cell_begin.push_back(static_cast<std::uint32_t>(out.triangles.size()));
     // Vertices: one per distinct edge, by false position along the edge on this brick's tape.
     std::vector<std::size_t> order(keys.size());
     std::iota(order.begin(), order.end(), 0);
@@ -288,7 +297,7 @@ TriangleMesh polygonize(std::shared_ptr<const Graph> graph, NodeId root, double 
       if (unique.empty() || keys[unique.back()] != keys[i]) unique.push_back(i);
     const std::size_t nv = unique.size();
     std::vector<glm::dvec3> pa(nv), pb(nv);
-    std::vector<double> fa(nv), fb(nv), t(nv);
+    std::vector<double> fa(nv), fb(nv), t(nv), span(nv);
     for (std::size_t v = 0; v < nv; ++v) {
       const auto [ia, ib] = ends[unique[v]];
       auto pos = [&](int li) {
@@ -300,26 +309,34 @@ TriangleMesh polygonize(std::shared_ptr<const Graph> graph, NodeId root, double 
       pb[v] = pos(a_in ? ib : ia);
       fa[v] = std::max(double(own[a_in ? ia : ib]), T);
       fb[v] = std::min(double(own[a_in ? ib : ia]), T);
+      span[v] = fa[v] - fb[v];
       t[v] = fa[v] > fb[v] ? (fa[v] - T) / (fa[v] - fb[v]) : 0.5;
     }
-    // Illinois false position, all of this brick's vertices per batch.
+    // Illinois false position, the brick's unconverged vertices per batch. Most converge in a
+    // few steps; those next to a crease of a min/max field need more.
     constexpr double kMargin = 1e-3;  // keeps vertices off grid points: no degenerate triangles
     std::vector<double> ta(nv, 0.0), tb(nv, 1.0);
     std::vector<float> xs(nv), ys(nv), zs(nv), fv(nv);
+    std::vector<std::uint32_t> live(nv);
+    std::iota(live.begin(), live.end(), 0u);
     const TapeEvaluator eval(tapes[a]);
-    for (int step = 0; step < options.refine_steps; ++step) {
-      for (std::size_t v = 0; v < nv; ++v) {
+    for (int step = 0; step < options.refine_steps && !live.empty(); ++step) {
+      const std::size_t nl = live.size();
+      for (std::size_t i = 0; i < nl; ++i) {
+        const std::uint32_t v = live[i];
         t[v] = std::clamp(t[v], kMargin, 1.0 - kMargin);
         const glm::dvec3 p = pa[v] + t[v] * (pb[v] - pa[v]);
-        xs[v] = float(p.x);
-        ys[v] = float(p.y);
-        zs[v] = float(p.z);
+        xs[i] = float(p.x);
+        ys[i] = float(p.y);
+        zs[i] = float(p.z);
       }
-      for (std::size_t at = 0; at < nv; at += kBlock)
-        eval.field_block(xs.data() + at, ys.data() + at, zs.data() + at, int(std::min<std::size_t>(kBlock, nv - at)),
+      for (std::size_t at = 0; at < nl; at += kBlock)
+        eval.field_block(xs.data() + at, ys.data() + at, zs.data() + at, int(std::min<std::size_t>(kBlock, nl - at)),
                          fv.data() + at);
-      for (std::size_t v = 0; v < nv; ++v) {
-        const double f = fv[v];
+      std::size_t kept = 0;
+      for (std::size_t i = 0; i < nl; ++i) {
+        const std::uint32_t v = live[i];
+        const double f = fv[i];
         if (f >= T) {
           ta[v] = t[v];
           fa[v] = f;
@@ -329,13 +346,44 @@ TriangleMesh polygonize(std::shared_ptr<const Graph> graph, NodeId root, double 
           fb[v] = f;
           fa[v] = T + 0.5 * (fa[v] - T);
         }
+        // Done when f - T, or the bracket, is a small fraction of the change across the edge.
+        const double tol = options.refine_tolerance;
+        const bool converged = std::abs(f - T) <= tol * span[v] || tb[v] - ta[v] <= tol;
+        if (converged) continue;  // t[v] is the last point evaluated
         t[v] = fa[v] > fb[v] ? ta[v] + (fa[v] - T) / (fa[v] - fb[v]) * (tb[v] - ta[v]) : 0.5 * (ta[v] + tb[v]);
+        live[kept++] = v;
       }
+      live.resize(kept);
     }
     out.vertices.resize(nv);
-    for (std::size_t v = 0; v < nv; ++v) {
-      const double tv = std::clamp(t[v], kMargin, 1.0 - kMargin);
-      out.vertices[v] = {keys[unique[v]], active[a], pa[v] + tv * (pb[v] - pa[v])};
+    for (std::size_t v = 0; v < nv; ++v)
+      out.vertices[v] = {keys[unique[v]], active[a], pa[v] + std::clamp(t[v], kMargin, 1.0 - kMargin) * (pb[v] - pa[v]),
+                         glm::vec3(0.0f)};
+    if (options.sharp_features && may_have_creases(*tapes[a])) {
+      // Exact normals for the vertices of cells that may hold a crease (meshers/features.hpp).
+      std::uint8_t suspect[kCells * kCells * kCells];
+      mark_suspect_cells({own, std::size_t(kBrickPoints)}, kCells, options.features, suspect);
+      std::vector<std::uint8_t> wanted(nv, 0);
+      for (int c = 0; c < kCells * kCells * kCells; ++c) {
+        if (!suspect[c]) continue;
+        for (std::uint32_t i = cell_begin[std::size_t(c)]; i < cell_begin[std::size_t(c) + 1]; ++i)
+          for (std::uint64_t key : out.triangles[i])
+            wanted[std::size_t(std::lower_bound(out.vertices.begin(), out.vertices.end(), key,
+                                                [](const EdgeVertex& e, std::uint64_t k) { return e.key < k; }) -
+                               out.vertices.begin())] = 1;
+      }
+      std::vector<glm::dvec3> at, grad;
+      for (std::size_t v = 0; v < nv; ++v)
+        if (wanted[v]) at.push_back(out.vertices[v].position);
+      grad.resize(at.size());
+      if (!at.empty()) eval.gradient(at, {}, grad);
+      for (std::size_t v = 0, i = 0; v < nv; ++v) {
+        if (!wanted[v]) continue;
+        const double len = glm::length(grad[i]);
+        // The field grows inward: the outward normal is -grad f.
+        if (len > 0 && std::isfinite(len)) out.vertices[v].normal = glm::vec3(-grad[i] / len);
+        ++i;
+      }
     }
     report(0.6, 0.3);
   });
@@ -351,8 +399,10 @@ TriangleMesh polygonize(std::shared_ptr<const Graph> graph, NodeId root, double 
     all.insert(all.end(), o.vertices.begin(), o.vertices.end());
     tri_count += o.triangles.size();
   }
+  // The copy kept is the lowest brick's, among those with a normal if any has one.
   std::sort(all.begin(), all.end(), [](const EdgeVertex& x, const EdgeVertex& y) {
-    return x.key != y.key ? x.key < y.key : x.brick < y.brick;
+    const bool nx = x.normal != glm::vec3(0.0f), ny = y.normal != glm::vec3(0.0f);
+    return x.key != y.key ? x.key < y.key : nx != ny ? nx : x.brick < y.brick;
   });
   all.erase(std::unique(all.begin(), all.end(), [](const EdgeVertex& x, const EdgeVertex& y) { return x.key == y.key; }),
             all.end());
@@ -366,6 +416,19 @@ TriangleMesh polygonize(std::shared_ptr<const Graph> graph, NodeId root, double 
   for (const BrickOutput& o : outputs)
     for (const auto& tri : o.triangles) mesh.triangles.push_back({id(tri[0]), id(tri[1]), id(tri[2])});
   stats.seconds_merge = seconds_since(t0);
+
+  // 5. Creases: split the edges that cross them (meshers/features.hpp).
+  t0 = std::chrono::steady_clock::now();
+  std::vector<glm::vec3> normals(all.size());
+  bool any_normal = false;
+  for (std::size_t i = 0; i < all.size(); ++i) any_normal |= (normals[i] = all[i].normal) != glm::vec3(0.0f);
+  if (any_normal) {
+    const TapeEvaluator eval(std::make_shared<const Tape>(compile_tape(graph, root, T)));
+    const CreaseStats crease = split_creases(mesh, normals, eval, T, h, options.features);
+    stats.crease_edges = crease.split_edges;
+    stats.corner_vertices = crease.corners;
+  }
+  stats.seconds_features = seconds_since(t0);
   if (options.progress) options.progress(1.0);
   if (stats_out) *stats_out = stats;
   return mesh;

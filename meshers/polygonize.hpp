@@ -10,10 +10,13 @@
 // inside/outside label per grid point (shared points take their owner brick's label), gives a
 // closed, oriented 2-manifold by construction. Vertices sit on grid edges, keyed by edge so they
 // are shared exactly, and are refined onto the surface by false position along their edge.
+// Edges that cross a crease or a corner are split at a point on it (meshers/features.hpp), so
+// min/max Booleans and crops stay sharp.
 //
 // Deterministic: the same node and precision give the same mesh at any thread count.
 #pragma once
 
+#include "meshers/features.hpp"
 #include "meshers/triangle_mesh.hpp"
 #include "runtime/aabb.hpp"
 #include "runtime/graph.hpp"
@@ -28,7 +31,12 @@ namespace ht {
 struct PolygonizeOptions {
   double precision = 0.0;                        ///< cell size (about the edge length); > 0
   std::size_t memory_budget = std::size_t(4) << 30;  ///< bytes the polygonizer may use
-  int refine_steps = 6;                          ///< false-position steps per vertex (Illinois)
+  int refine_steps = 24;                         ///< at most this many false-position steps per vertex (Illinois)
+  /// A vertex is done when |f - T| is below this fraction of f's change along its edge, or its
+  /// bracket below this fraction of the edge.
+  double refine_tolerance = 1e-3;
+  bool sharp_features = true;                    ///< split edges along creases (meshers/features.hpp)
+  FeatureOptions features;
   /// Called from the calling thread with the fraction done, at most about 100 times.
   std::function<void(double)> progress;
 };
@@ -36,7 +44,8 @@ struct PolygonizeOptions {
 struct PolygonizeStats {
   std::size_t bricks_total = 0, bricks_active = 0;
   std::size_t points_evaluated = 0;
-  double seconds_classify = 0, seconds_sample = 0, seconds_extract = 0, seconds_merge = 0;
+  std::size_t crease_edges = 0, corner_vertices = 0;  ///< sharp features (meshers/features.hpp)
+  double seconds_classify = 0, seconds_sample = 0, seconds_extract = 0, seconds_merge = 0, seconds_features = 0;
   Aabb domain;
 };
 

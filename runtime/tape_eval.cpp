@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <type_traits>
 #include <vector>
 
 namespace ht {
@@ -78,11 +79,26 @@ HT_LANE void curve_loop(const Block<T>& b, const Instruction& ins, const float* 
       for (int i = 0; i < kChunk; ++i) o[i] = T(0.0f);
       continue;
     }
-    for (int i = 0; i < kChunk; ++i) o[i] = T(std::numeric_limits<float>::max());
-    for (int g = 0; g < segments; ++g) {
-      const float* seg = s + 1 + 7 * g;
-      for (int i = 0; i < kChunk; ++i)
-        o[i] = min_(o[i], segment2(V3<T>{x[c0 + i], y[c0 + i], z[c0 + i]}, seg));
+    if constexpr (std::is_same_v<T, float>) {
+      for (int i = 0; i < kChunk; ++i) o[i] = std::numeric_limits<float>::max();
+      for (int g = 0; g < segments; ++g) {
+        const float* seg = s + 1 + 7 * g;
+        for (int i = 0; i < kChunk; ++i) o[i] = min_(o[i], segment2(V3<T>{x[c0 + i], y[c0 + i], z[c0 + i]}, seg));
+      }
+    } else {
+      // Gradients: the nearest segment found on values, then differentiated alone (the min's
+      // derivative is its argument's), instead of carrying derivatives through every segment.
+      for (int i = 0; i < kChunk; ++i) {
+        const V3<float> q{val(x[c0 + i]), val(y[c0 + i]), val(z[c0 + i])};
+        float best = std::numeric_limits<float>::max();
+        int at = 0;
+        for (int g = 0; g < segments; ++g)
+          if (const float d = segment2(q, s + 1 + 7 * g); d < best) {
+            best = d;
+            at = g;
+          }
+        o[i] = segment2(V3<T>{x[c0 + i], y[c0 + i], z[c0 + i]}, s + 1 + 7 * at);
+      }
     }
     for (int i = 0; i < kChunk; ++i) o[i] = falloff2(o[i], k);
   }

@@ -313,13 +313,17 @@ int cmd_mesh(const MeshArgs& a) {
                    {"surface_error_vertex_max", checks.vertex_error_max},
                    {"surface_error_vertex_mean", checks.vertex_error_mean},
                    {"surface_error_face_max", checks.face_error_max},
-                   {"surface_error_face_mean", checks.face_error_mean}};
+                   {"surface_error_face_mean", checks.face_error_mean},
+                   {"inverted_faces", checks.inverted_faces},
+                   {"inverted_area", checks.inverted_area}};
     j["bricks"] = {{"total", stats.bricks_total}, {"active", stats.bricks_active}};
+    j["sharp_features"] = {{"crease_edges_split", stats.crease_edges}, {"corner_vertices", stats.corner_vertices}};
     j["seconds"] = {{"load", load_s},
                     {"classify", stats.seconds_classify},
                     {"sample", stats.seconds_sample},
                     {"extract", stats.seconds_extract},
                     {"merge", stats.seconds_merge},
+                    {"features", stats.seconds_features},
                     {"mesh_total", mesh_s},
                     {"checks", check_s},
                     {"write", write_s}};
