@@ -215,3 +215,24 @@ TEST(Cli, MeshStrategiesAreLoggedPerNode) {
   }
   std::filesystem::remove_all(dir);
 }
+
+TEST(Cli, SharpFeaturesCanBeTurnedOff) {
+  const auto dir = test::temp_dir("cli-sharp");
+  const std::string s = write_scene(dir, "s.json", R"({"hybridtree": 1, "mesher": {"precision": 0.04}, "root":
+      {"type": "crop", "min": [-1, -1, -0.2], "max": [0.25, 1, 1], "child": {"type": "point", "center": [0, 0, 0], "radius": 1}}})");
+  double face_error[2] = {0, 0};
+  for (int on = 0; on < 2; ++on) {
+    const auto r = test::run_cli("mesh " + s + " -o " + (dir / "m.ply").string() + " --strategy global --sharp-features " +
+                                 (on ? "on" : "off") + " --stats-json " + (dir / "st.json").string());
+    ASSERT_EQ(r.code, 0) << r.err;
+    std::ifstream in(dir / "st.json");
+    const auto j = nlohmann::json::parse(in);
+    EXPECT_EQ(j["checks"]["watertight"], true);
+    EXPECT_EQ(j["sharp_features"]["crease_edges_split"].get<int>() > 0, on == 1);
+    face_error[on] = j["checks"]["surface_error_face_max"].get<double>();
+  }
+  EXPECT_LT(face_error[1], 0.5 * face_error[0]);
+  const auto bad = test::run_cli("mesh " + s + " -o " + (dir / "m.ply").string() + " --sharp-features maybe");
+  EXPECT_EQ(bad.code, 2);
+  std::filesystem::remove_all(dir);
+}

@@ -203,6 +203,7 @@ int cmd_eval(const std::string& scene, const std::string& points_file, bool grad
 
 struct MeshArgs {
   std::string scene, out, strategy, stats_json;  // strategy: empty = the scene's
+  std::string sharp = "on";
   double precision = 0.0, memory_gib = 4.0;
   int threads = 0;
 };
@@ -242,6 +243,7 @@ int cmd_mesh(const MeshArgs& a) {
   ht::PolygonizeOptions options;
   options.precision = h;
   options.memory_budget = static_cast<std::size_t>(a.memory_gib * double(1u << 30));
+  options.sharp_features = a.sharp == "on";
   options.progress = progress_bar();
   std::string strategy_name = a.strategy;
   if (strategy_name.empty())
@@ -363,6 +365,10 @@ int main(int argc, char** argv) {
   mesh_cmd->add_option("--threads", mesh_args.threads, "Worker threads (default: all cores)")->check(CLI::Range(1, 1024));
   mesh_cmd->add_option("--stats-json", mesh_args.stats_json, "Write triangles, checks and seconds per stage to FILE");
   mesh_cmd->add_option("--memory-budget", mesh_args.memory_gib, "GiB the mesher may use (default 4)")->check(CLI::PositiveNumber);
+  mesh_cmd->add_option("--sharp-features", mesh_args.sharp,
+                       "on: split edges along creases of min/max Booleans, crops and mesh leaves (default); off: plain "
+                       "marching tetrahedra")
+      ->check(CLI::IsMember({"on", "off"}));
 
   int count = 250;
   std::uint64_t seed = 1;
