@@ -100,9 +100,7 @@ void classify(const Graph& g, NodeId root, double T, const Grid& grid, glm::ivec
 }
 
 struct EdgeVertex {
-  // Grid-edge vertices: lower grid point * 8 + direction (x = 1, y = 2, z = 4). Feature
-  // vertices (meshers/features.hpp): the cell's lower grid point * 8 (direction 0).
-  std::uint64_t key;
+  std::uint64_t key;  // lower grid point * 8 + direction (x = 1, y = 2, z = 4)
   std::uint32_t brick;
   glm::dvec3 position;
   glm::vec3 normal;  // outward unit normal where a crease is suspected, else zero
