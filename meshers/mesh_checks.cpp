@@ -1,5 +1,8 @@
 #include "meshers/mesh_checks.hpp"
 
+#include "meshers/union_find.hpp"
+
+#include "meshers/self_intersections.hpp"
 #include "runtime/tape_eval.hpp"
 
 #include <glm/geometric.hpp>
@@ -14,16 +17,6 @@ namespace ht {
 namespace {
 
 constexpr std::uint32_t kNoIndex = ~0u;
-
-struct UnionFind {
-  std::vector<std::uint32_t> parent;
-  explicit UnionFind(std::size_t n) : parent(n) { std::iota(parent.begin(), parent.end(), 0u); }
-  std::uint32_t find(std::uint32_t x) {
-    while (parent[x] != x) x = parent[x] = parent[parent[x]];
-    return x;
-  }
-  void unite(std::uint32_t a, std::uint32_t b) { parent[find(a)] = find(b); }
-};
 
 }  // namespace
 
@@ -156,6 +149,7 @@ MeshChecks check_mesh(const TriangleMesh& mesh) {
     c.min_angle = std::min(c.min_angle, amin);
     ++c.min_angle_histogram[std::min<std::size_t>(5, static_cast<std::size_t>(amin / 10.0))];
   }
+  if (!T.empty()) c.self_intersecting_pairs = find_self_intersections(mesh, 0).pairs;
   return c;
 }
 

@@ -35,15 +35,23 @@ struct MeshChecks {
   /// too thin for their orientation to matter (their area tells which).
   std::size_t inverted_faces = 0;
   double inverted_area = 0;
+  /// Pairs of triangles that intersect beyond their shared vertices or edge: crossings, touching
+  /// at a point they do not share, folds (see meshers/self_intersections.hpp). Exact.
+  std::size_t self_intersecting_pairs = 0;
 
   bool closed() const { return boundary_edges == 0; }
   bool manifold() const { return nonmanifold_edges == 0 && nonmanifold_vertices == 0; }
   bool oriented() const { return misoriented_edges == 0; }
   /// Closed, manifold, oriented, no degenerate triangle: what every mesher must return.
   bool watertight() const { return closed() && manifold() && oriented() && degenerate_triangles == 0; }
+  /// No self-intersecting pair. Separate from watertight(), which is about topology.
+  bool intersection_free() const { return self_intersecting_pairs == 0; }
 };
 
-/// Topology and geometry checks. Linear time; no allocation beyond a few arrays of the mesh's size.
+/// Topology and geometry checks. Linear time, except the self-intersection count: O(n log n) plus
+/// an exact test per pair of triangles whose boxes overlap, in parallel (see
+/// find_self_intersections()). No allocation beyond a few arrays of the mesh's size and the
+/// candidate pairs.
 MeshChecks check_mesh(const TriangleMesh& mesh);
 
 /// Fills the surface-error fields of `checks` by evaluating f and grad f with the tape at T.
