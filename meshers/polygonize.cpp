@@ -126,6 +126,14 @@ TriangleMesh polygonize(std::shared_ptr<const Graph> graph, NodeId root, double 
     return mesh;
   }
   if (!solid.finite()) throw PolygonizeError("the solid {f >= T} cannot be bounded (is a blend over R-function differences?)");
+  const bool clipped = !options.clip.empty();
+  if (clipped) {
+    solid = intersect(solid, options.clip);
+    if (solid.empty()) {
+      if (stats_out) *stats_out = stats;
+      return mesh;
+    }
+  }
   const Aabb domain = solid.expanded(2.0 * h);
   stats.domain = domain;
   Grid grid;
@@ -149,8 +157,13 @@ TriangleMesh polygonize(std::shared_ptr<const Graph> graph, NodeId root, double 
   std::vector<std::uint8_t> state(grid.brick_count(), kOutside);
   classify(g, root, T, grid, {0, 0, 0}, grid.bricks, state);
   std::vector<std::uint32_t> active;
+  // Bricks the filter rejects stay kActive with no slot: their shared grid points then take the
+  // label of the brick that sampled them (they lie where the caller cuts the patch away).
   for (std::size_t i = 0; i < state.size(); ++i)
-    if (state[i] == kActive) active.push_back(static_cast<std::uint32_t>(i));
+    if (state[i] == kActive) {
+      const glm::ivec3 b = grid.brick_at(i);
+      if (!options.brick_filter || options.brick_filter(grid.box(b, b + 1))) active.push_back(static_cast<std::uint32_t>(i));
+    }
   stats.bricks_active = active.size();
   const double need = table_bytes + double(active.size()) * 12288.0;
   if (need > double(options.memory_budget))
@@ -173,7 +186,9 @@ TriangleMesh polygonize(std::shared_ptr<const Graph> graph, NodeId root, double 
         d % std::max<std::size_t>(1, active.size() / 50) == 0)
       options.progress(base + span * double(d) / double(active.size()));
   };
+  auto cancelled = [&] { return options.cancel && options.cancel->load(std::memory_order_relaxed); };
   tbb::parallel_for(std::size_t(0), active.size(), [&](std::size_t a) {
+    if (cancelled()) return;
     const glm::ivec3 b = grid.brick_at(active[a]);
     const Aabb box = grid.box(b, b + 1);
     tapes[a] = std::make_shared<const Tape>(compile_tape(graph, root, T, &box));
@@ -192,6 +207,7 @@ TriangleMesh polygonize(std::shared_ptr<const Graph> graph, NodeId root, double 
       eval.field_block(xs + at, ys + at, zs + at, std::min(kBlock, kBrickPoints - at), values.data() + a * kBrickPoints + at);
     report(0.05, 0.55);
   });
+  if (cancelled()) throw MeshCancelled("meshing was cancelled");
   stats.points_evaluated = active.size() * kBrickPoints;
   stats.seconds_sample = seconds_since(t0);
 
@@ -207,6 +223,7 @@ TriangleMesh polygonize(std::shared_ptr<const Graph> graph, NodeId root, double 
     if (owner == b) return own[local.x + kPoints * (local.y + kPoints * local.z)] >= float(T);
     const std::size_t oi = grid.brick_index(owner);
     if (state[oi] != kActive) return state[oi] == kInside;
+    if (slot[oi] == kNone) return own[local.x + kPoints * (local.y + kPoints * local.z)] >= float(T);
     return values[std::size_t(slot[oi]) * kBrickPoints + std::size_t(at.x + kPoints * (at.y + kPoints * at.z))] >= float(T);
   };
 
@@ -216,6 +233,7 @@ TriangleMesh polygonize(std::shared_ptr<const Graph> graph, NodeId root, double 
   std::atomic<bool> reaches_boundary{false};
   done = 0;
   tbb::parallel_for(std::size_t(0), active.size(), [&](std::size_t a) {
+    if (cancelled()) return;
     const glm::ivec3 b = grid.brick_at(active[a]);
     const float* own = values.data() + a * kBrickPoints;
     std::uint8_t label[kBrickPoints];
@@ -386,7 +404,8 @@ TriangleMesh polygonize(std::shared_ptr<const Graph> graph, NodeId root, double 
     report(0.6, 0.3);
   });
   stats.seconds_extract = seconds_since(t0);
-  if (reaches_boundary)
+  if (cancelled()) throw MeshCancelled("meshing was cancelled");
+  if (reaches_boundary && !clipped)
     throw PolygonizeError("the solid reaches the edge of its own bounds: it is unbounded (a blend over R-function differences?)");
 
   // 4. One vertex per edge key across bricks (the lowest brick's copy), triangles renumbered.

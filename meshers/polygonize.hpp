@@ -21,6 +21,7 @@
 #include "runtime/aabb.hpp"
 #include "runtime/graph.hpp"
 
+#include <atomic>
 #include <cstddef>
 #include <functional>
 #include <memory>
@@ -39,6 +40,15 @@ struct PolygonizeOptions {
   FeatureOptions features;
   /// Called from the calling thread with the fraction done, at most about 100 times.
   std::function<void(double)> progress;
+  /// When set, only the bricks it accepts are meshed: the result is the part of the surface in
+  /// those bricks, open where they end (the local strategies mesh a patch this way and cut it,
+  /// meshers/local_ops.hpp). Called with each brick's box, from any thread.
+  std::function<bool(const Aabb&)> brick_filter;
+  /// When not empty, only the part of the domain inside this box is gridded (with the filter, a
+  /// patch costs what its region costs, not what the node's whole solid would).
+  Aabb clip;
+  /// Polled between bricks; when it reads true the polygonizer throws MeshCancelled.
+  const std::atomic<bool>* cancel = nullptr;
 };
 
 struct PolygonizeStats {
@@ -53,6 +63,11 @@ struct PolygonizeStats {
 /// message says how much it would need), an unbounded solid, an ffd before meshing exists.
 struct PolygonizeError : std::runtime_error {
   using std::runtime_error::runtime_error;
+};
+
+/// Thrown when a run is cancelled through its cancellation flag.
+struct MeshCancelled : PolygonizeError {
+  using PolygonizeError::PolygonizeError;
 };
 
 /// Meshes node `root` of `graph` at threshold T. An empty surface gives an empty mesh.

@@ -43,7 +43,8 @@ std::function<glm::dvec3(const glm::dvec3&)> forward_map(const Graph& graph, Nod
 }
 
 TriangleMesh warp_mesh(const TriangleMesh& child, const std::function<glm::dvec3(const glm::dvec3&)>& warp,
-                       const TapeEvaluator& field, double T, double max_edge, WarpRemeshStats* stats) {
+                       const TapeEvaluator& field, double T, double max_edge, WarpRemeshStats* stats,
+                       const Aabb* region) {
   std::vector<glm::dvec3> local = child.positions;  // child space
   std::vector<glm::uvec3> tris = child.triangles;
   std::vector<glm::dvec3> world(local.size());
@@ -56,7 +57,9 @@ TriangleMesh warp_mesh(const TriangleMesh& child, const std::function<glm::dvec3
     for (const auto& t : tris)
       for (int k = 0; k < 3; ++k) {
         const std::uint32_t a = t[k], b = t[(k + 1) % 3];
-        if (glm::dot(world[a] - world[b], world[a] - world[b]) > limit2) long_edges.push_back(edge_key(a, b));
+        if (glm::dot(world[a] - world[b], world[a] - world[b]) > limit2 &&
+            (!region || region->contains(0.5 * (world[a] + world[b]))))
+          long_edges.push_back(edge_key(a, b));
       }
     std::sort(long_edges.begin(), long_edges.end());
     long_edges.erase(std::unique(long_edges.begin(), long_edges.end()), long_edges.end());

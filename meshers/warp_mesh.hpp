@@ -24,9 +24,10 @@ struct WarpRemeshStats {
 
 /// Moves child_mesh (in the child's space) by `warp` and splits edges longer than max_edge after
 /// warping, projecting new vertices onto {f_child = T} with `child_field` (the child's tape).
+/// With `region`, only edges whose warped midpoint lies in that box are split.
 TriangleMesh warp_mesh(const TriangleMesh& child_mesh, const std::function<glm::dvec3(const glm::dvec3&)>& warp,
                        const TapeEvaluator& child_field, double threshold, double max_edge,
-                       WarpRemeshStats* stats = nullptr);
+                       WarpRemeshStats* stats = nullptr, const Aabb* region = nullptr);
 
 /// The forward map of warp node `node` (affine, twist, taper, bend or ffd).
 std::function<glm::dvec3(const glm::dvec3&)> forward_map(const Graph& graph, NodeId node);

@@ -102,9 +102,11 @@ struct Tape {
   std::string listing() const;
 };
 
-/// Compiles `root` (a root on its own: `auto` picks min/max there). With `region`, the tape is
-/// specialized to that box: shorter, and equal to the full tape inside it.
-Tape compile_tape(std::shared_ptr<const Graph> graph, NodeId root, double threshold, const Aabb* region = nullptr);
+/// Compiles `root` (a root on its own: `auto` picks min/max there, unless `under_blend` says that
+/// something above blends it, as when a mesher needs a child's field in its parent's context).
+/// With `region`, the tape is specialized to that box: shorter, and equal to the full tape inside it.
+Tape compile_tape(std::shared_ptr<const Graph> graph, NodeId root, double threshold, const Aabb* region = nullptr,
+                  bool under_blend = false);
 
 /// A conservative range of a node's field over a box (interval analysis; the compiler's pruning
 /// rules rest on it). `under_blend` as in reference_field.

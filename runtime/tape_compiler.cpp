@@ -414,12 +414,13 @@ std::string Tape::listing() const {
   return out;
 }
 
-Tape compile_tape(std::shared_ptr<const Graph> graph, NodeId root, double threshold, const Aabb* region) {
+Tape compile_tape(std::shared_ptr<const Graph> graph, NodeId root, double threshold, const Aabb* region,
+                  bool under_blend) {
   Tape tape;
   tape.graph = graph;
   tape.threshold = static_cast<float>(threshold);
   Compiler compiler(*graph, threshold, tape);
-  const int r = compiler.materialize(compiler.node(root, 0, false, region, 0));
+  const int r = compiler.materialize(compiler.node(root, 0, under_blend, region, 0));
   tape.result = static_cast<std::uint16_t>(r);
   tape.scalar_registers = compiler.scalar_count();
   tape.frames = compiler.frame_count();

@@ -1,8 +1,8 @@
-// Per-node meshing strategies: leaves share their mesh, primitives sweep, warps warp their
-// child's mesh and split stretched edges with new vertices on the warped surface, operators
-// polygonize; every result is watertight.
+// The mesh plan: leaves share their mesh, primitives sweep, warps warp their child's mesh and
+// split stretched edges with new vertices on the warped surface, hints win; every result is
+// watertight.
 #include "meshers/mesh_checks.hpp"
-#include "meshers/mesh_node.hpp"
+#include "meshers/mesh_plan.hpp"
 #include "nodes/mesh_leaf.hpp"
 #include "runtime/builder.hpp"
 #include "runtime/tape_eval.hpp"
@@ -17,21 +17,22 @@ using glm::dvec3;
 
 namespace {
 constexpr double kT = 0.5;
-}
 
-TEST(MeshNode, LeavesShareTheirMesh) {
+MeshOptions at(double h, MeshStrategy s = MeshStrategy::Auto) { return test::mesh_options(h, s); }
+}  // namespace
+
+TEST(MeshPlan, LeavesShareTheirMesh) {
   Builder b(kT);
   const auto leaf = MeshLeaf::load(test::cgal_mesh("eight.off"));
   const NodeId m = b.mesh(leaf, {0.05});
   const Tree t = b.build(m);
-  std::vector<MeshLogEntry> log;
-  const auto mesh = mesh_node(t, m, 0.02, MeshStrategy::Auto, &log);
-  EXPECT_EQ(mesh.get(), leaf->surface().get());  // the same object: not copied
-  ASSERT_EQ(log.size(), 1u);
-  EXPECT_EQ(log[0].strategy, "shared leaf mesh");
+  const MeshResult r = mesh_tree(t, at(0.02));
+  EXPECT_EQ(r.mesh.get(), leaf->surface().get());  // the same object: not copied
+  ASSERT_EQ(r.nodes.size(), 1u);
+  EXPECT_EQ(r.nodes[0].strategy, JobStrategy::SharedLeaf);
 }
 
-TEST(MeshNode, WarpedMeshesStayWatertightAndOnTheSurface) {
+TEST(MeshPlan, WarpedMeshesStayWatertightAndOnTheSurface) {
   for (int kind = 0; kind < 4; ++kind) {
     Builder b(kT);
     const NodeId child = b.segment({-0.6, 0, 0}, {0.6, 0, 0}, {0.5});
@@ -46,8 +47,8 @@ TEST(MeshNode, WarpedMeshesStayWatertightAndOnTheSurface) {
       w = b.bend(child, Axis::X, {0, 0, 0}, -0.8, 0.8, 0.9);
     const Tree t = b.build(w);
     const double h = 0.03;
-    std::vector<MeshLogEntry> log;
-    const auto mesh = mesh_node(t, w, h, MeshStrategy::Auto, &log);
+    const MeshResult r = mesh_tree(t, at(h));
+    const auto& mesh = r.mesh;
     MeshChecks c = check_mesh(*mesh);
     measure_surface_error(*mesh, t.evaluator(), kT, c);
     EXPECT_TRUE(c.watertight()) << kind << ": boundary " << c.boundary_edges << " degenerate " << c.degenerate_triangles;
@@ -58,25 +59,25 @@ TEST(MeshNode, WarpedMeshesStayWatertightAndOnTheSurface) {
     for (const auto& tri : mesh->triangles)
       for (int k = 0; k < 3; ++k) longest = std::max(longest, glm::length(mesh->positions[tri[k]] - mesh->positions[tri[(k + 1) % 3]]));
     EXPECT_LT(longest, 1.5 * h * 1.01) << kind;
-    ASSERT_EQ(log.size(), 2u);
-    EXPECT_EQ(log[0].strategy, "sweep");
+    ASSERT_EQ(r.nodes.size(), 2u);
+    EXPECT_EQ(r.nodes[0].strategy, JobStrategy::Sweep);
+    EXPECT_EQ(r.nodes[1].strategy, JobStrategy::WarpedChild);
   }
 }
 
-TEST(MeshNode, OperatorsPolygonizeAndHintsWin) {
+TEST(MeshPlan, HintsWinOverTheRequest) {
   Builder b(kT);
   const NodeId a = b.point({0, 0, 0}, {1.0});
   const NodeId c = b.point({0.5, 0, 0}, {1.0});
   const NodeId blend = b.blend({a, c});
   const NodeId warped = b.affine(blend, glm::translate(glm::dmat4(1.0), dvec3(1, 0, 0)));
-  b.set_mesher(a, MesherHint::Global);
+  b.set_mesher(blend, MesherHint::Global);
   const Tree t = b.build(warped);
-  std::vector<MeshLogEntry> log;
-  const auto mesh = mesh_node(t, warped, 0.04, MeshStrategy::Auto, &log);
-  EXPECT_TRUE(check_mesh(*mesh).watertight());
-  ASSERT_EQ(log.size(), 2u);
-  EXPECT_NE(log[0].strategy.find("global"), std::string::npos);
-  log.clear();
-  mesh_node(t.subtree(a), a, 0.04, MeshStrategy::Auto, &log);
-  EXPECT_EQ(log[0].strategy, "global");  // the node's own hint
+  const MeshResult r = mesh_tree(t, at(0.04, MeshStrategy::Local));
+  EXPECT_TRUE(check_mesh(*r.mesh).watertight());
+  ASSERT_EQ(r.nodes.size(), 2u);  // the blend's children need no jobs
+  EXPECT_EQ(r.nodes[0].node, blend);
+  EXPECT_EQ(r.nodes[0].strategy, JobStrategy::Global);
+  EXPECT_EQ(r.nodes[0].reason, JobReason::Hint);
+  EXPECT_EQ(r.nodes[1].strategy, JobStrategy::WarpedChild);
 }

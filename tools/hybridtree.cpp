@@ -7,7 +7,7 @@
 #include "meshers/ffd.hpp"
 #include "meshers/mesh_checks.hpp"
 #include "meshers/mesh_io.hpp"
-#include "meshers/mesh_node.hpp"
+#include "meshers/mesh_plan.hpp"
 #include "meshers/polygonize.hpp"
 #include "nodes/mesh_leaf.hpp"
 #include "runtime/scene.hpp"
@@ -231,6 +231,58 @@ void write_text_atomically(const std::string& file, const std::string& text) {
   if (std::rename(tmp.c_str(), file.c_str()) != 0) throw InputError(file + ": cannot move the stats file into place");
 }
 
+// "trim blend", or "global (fallback: ...)" for the root's job.
+std::string root_strategy(const ht::MeshResult& r, ht::NodeId root) {
+  for (const ht::NodeReport& e : r.nodes)
+    if (e.node == root) return std::string(ht::to_string(e.strategy)) + " (" + ht::to_string(e.reason) + ")";
+  return "?";
+}
+
+nlohmann::json node_json(const ht::Graph& g, const ht::NodeReport& e) {
+  nlohmann::json n = {{"node", g.label(e.node)},
+                      {"id", e.node},
+                      {"kind", std::string(ht::kind_name(g.kind[e.node]))},
+                      {"strategy", ht::to_string(e.strategy)},
+                      {"reason", ht::to_string(e.reason)},
+                      {"triangles", e.triangles},
+                      {"seconds", e.seconds}};
+  if (e.rho >= 0) n["rho"] = e.rho;
+  if (!e.fallback_cause.empty()) n["fallback_cause"] = e.fallback_cause;
+  if (e.polygonized)
+    n["bricks"] = {{"total", e.polygonize.bricks_total}, {"active", e.polygonize.bricks_active},
+                   {"points_evaluated", e.polygonize.points_evaluated}};
+  if (e.strategy == ht::JobStrategy::TrimBlend || e.strategy == ht::JobStrategy::TrimBoolean ||
+      e.strategy == ht::JobStrategy::TrimCrop)
+    n["local"] = {{"operand_triangles", e.local.operand_triangles},
+                  {"kept_triangles", e.local.kept_triangles},
+                  {"patch_triangles", e.local.patch_triangles},
+                  {"stitch_welded", e.local.stitch.welded},
+                  {"stitch_inserted", e.local.stitch.inserted},
+                  {"stitch_largest_gap", e.local.stitch.largest_gap}};
+  if (e.edges_split) n["edges_split"] = e.edges_split;
+  return n;
+}
+
+// The polygonizer's statistics summed over every job that ran it.
+ht::PolygonizeStats total_polygonize(const ht::MeshResult& r) {
+  ht::PolygonizeStats s;
+  for (const ht::NodeReport& e : r.nodes) {
+    if (!e.polygonized) continue;
+    const ht::PolygonizeStats& p = e.polygonize;
+    s.bricks_total += p.bricks_total;
+    s.bricks_active += p.bricks_active;
+    s.points_evaluated += p.points_evaluated;
+    s.crease_edges += p.crease_edges;
+    s.corner_vertices += p.corner_vertices;
+    s.seconds_classify += p.seconds_classify;
+    s.seconds_sample += p.seconds_sample;
+    s.seconds_extract += p.seconds_extract;
+    s.seconds_merge += p.seconds_merge;
+    s.seconds_features += p.seconds_features;
+  }
+  return s;
+}
+
 int cmd_mesh(const MeshArgs& a) {
   if (!ht::supported_mesh_extension(a.out))
     throw InputError(a.out + ": unsupported output extension (use .ply, .obj, .off or .stl)");
@@ -238,48 +290,43 @@ int cmd_mesh(const MeshArgs& a) {
   const auto t0 = clock::now();
   const ht::Tree loaded = ht::load_scene(a.scene);
   const double h = default_precision(loaded, a.precision);
-  const ht::Tree tree = ready(loaded, h, a.scene);
+  const ht::Tree& tree = loaded;
   const double load_s = std::chrono::duration<double>(clock::now() - t0).count();
-  ht::PolygonizeOptions options;
+  ht::MeshOptions options;
   options.precision = h;
-  options.memory_budget = static_cast<std::size_t>(a.memory_gib * double(1u << 30));
-  options.sharp_features = a.sharp == "on";
+  options.polygonize.memory_budget = static_cast<std::size_t>(a.memory_gib * double(1u << 30));
+  options.polygonize.sharp_features = a.sharp == "on";
+  options.blend_overlap = tree.mesher_settings().blend_overlap;
   options.progress = progress_bar();
   std::string strategy_name = a.strategy;
   if (strategy_name.empty())
     strategy_name = tree.mesher_settings().strategy == ht::MesherHint::Global  ? "global"
                     : tree.mesher_settings().strategy == ht::MesherHint::Local ? "local"
                                                                                 : "auto";
-  const ht::MeshStrategy strategy = strategy_name == "global" ? ht::MeshStrategy::Global
-                                    : strategy_name == "local" ? ht::MeshStrategy::Local
-                                                               : ht::MeshStrategy::Auto;
-  ht::PolygonizeStats stats;
-  std::vector<ht::MeshLogEntry> log;
+  options.strategy = strategy_name == "global" ? ht::MeshStrategy::Global
+                     : strategy_name == "local" ? ht::MeshStrategy::Local
+                                                : ht::MeshStrategy::Auto;
   const auto t1 = clock::now();
-  ht::TriangleMesh mesh;
+  ht::MeshResult result;
   try {
-    if (strategy == ht::MeshStrategy::Global) {
-      mesh = ht::polygonize(tree.graph_ptr(), tree.root(), tree.threshold(), options, &stats);
-      log.push_back({tree.root(), "global", mesh.triangles.size(), 0.0});
-    } else {
-      mesh = *ht::mesh_node(tree, tree.root(), h, strategy, &log, &options);
-    }
+    result = ht::mesh_tree(tree, options);
   } catch (const ht::CompileError& e) {
     throw InputError(a.scene + ": " + e.what());
   } catch (const ht::PolygonizeError& e) {
     throw InputError(a.scene + ": " + e.what());
   }
+  const ht::TriangleMesh& mesh = *result.mesh;
   const double mesh_s = std::chrono::duration<double>(clock::now() - t1).count();
   if (mesh.triangles.empty()) std::fprintf(stderr, "hybridtree: warning: %s: the surface is empty; writing an empty mesh\n", a.scene.c_str());
   const auto t2 = clock::now();
   ht::MeshChecks checks = ht::check_mesh(mesh);
-  if (!mesh.triangles.empty()) ht::measure_surface_error(mesh, tree.evaluator(), tree.threshold(), checks);
+  if (!mesh.triangles.empty()) ht::measure_surface_error(mesh, result.tree->evaluator(), tree.threshold(), checks);
   const double check_s = std::chrono::duration<double>(clock::now() - t2).count();
   const auto t3 = clock::now();
   ht::write_mesh(mesh, a.out);
   const double write_s = std::chrono::duration<double>(clock::now() - t3).count();
   std::printf("%s: %zu triangles, %zu vertices, precision %g, %.3f s meshing (%s at the root), %s, genus %ld\n",
-              a.out.c_str(), checks.triangles, checks.vertices, h, mesh_s, log.empty() ? "?" : log.back().strategy.c_str(),
+              a.out.c_str(), checks.triangles, checks.vertices, h, mesh_s, root_strategy(result, tree.root()).c_str(),
               checks.watertight() ? "closed manifold" : "NOT watertight", checks.genus);
   if (!a.stats_json.empty()) {
     nlohmann::json j;
@@ -288,11 +335,7 @@ int cmd_mesh(const MeshArgs& a) {
     j["precision"] = h;
     j["strategy"] = strategy_name;
     nlohmann::json nodes = nlohmann::json::array();
-    for (const ht::MeshLogEntry& e : log)
-      nodes.push_back({{"node", tree.graph().label(e.node)},
-                       {"strategy", e.strategy},
-                       {"triangles", e.triangles},
-                       {"seconds", e.seconds}});
+    for (const ht::NodeReport& e : result.nodes) nodes.push_back(node_json(tree.graph(), e));
     j["nodes"] = nodes;
     j["triangles"] = checks.triangles;
     j["vertices"] = checks.vertices;
@@ -316,8 +359,10 @@ int cmd_mesh(const MeshArgs& a) {
                    {"surface_error_vertex_mean", checks.vertex_error_mean},
                    {"surface_error_face_max", checks.face_error_max},
                    {"surface_error_face_mean", checks.face_error_mean},
+                   {"self_intersecting_pairs", checks.self_intersecting_pairs},
                    {"inverted_faces", checks.inverted_faces},
                    {"inverted_area", checks.inverted_area}};
+    const ht::PolygonizeStats stats = total_polygonize(result);
     j["bricks"] = {{"total", stats.bricks_total}, {"active", stats.bricks_active}};
     j["sharp_features"] = {{"crease_edges_split", stats.crease_edges}, {"corner_vertices", stats.corner_vertices}};
     j["seconds"] = {{"load", load_s},

@@ -55,4 +55,11 @@ CliResult run_cli(const std::string& args, const std::string& input) {
   return r;
 }
 
+MeshOptions mesh_options(double h, MeshStrategy s) {
+  MeshOptions o;
+  o.precision = h;
+  o.strategy = s;
+  return o;
+}
+
 }  // namespace ht::test

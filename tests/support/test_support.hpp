@@ -2,6 +2,8 @@
 // run the command-line tool.
 #pragma once
 
+#include "meshers/mesh_plan.hpp"
+
 #include <cstdint>
 #include <filesystem>
 #include <random>
@@ -25,6 +27,9 @@ struct CliResult {
   std::string out, err;
 };
 CliResult run_cli(const std::string& args, const std::string& input = "");
+
+/// Mesh plan options at precision h with strategy s (meshers/mesh_plan.hpp).
+MeshOptions mesh_options(double h, MeshStrategy s = MeshStrategy::Auto);
 
 /// Deterministic random numbers: every property test seeds from its own name.
 using Rng = std::mt19937_64;

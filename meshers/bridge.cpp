@@ -1,0 +1,233 @@
+#include "meshers/bridge.hpp"
+
+#include <glm/geometric.hpp>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <string>
+#include <unordered_map>
+
+namespace ht {
+namespace {
+
+constexpr std::uint32_t kNo = ~0u;
+
+// Directed boundary edges: from -> to for every edge used by one triangle.
+std::vector<std::uint32_t> boundary_next(const TriangleMesh& m) {
+  std::vector<std::array<std::uint32_t, 3>> e;  // lo, hi, from
+  e.reserve(3 * m.triangles.size());
+  for (const glm::uvec3& t : m.triangles)
+    for (int k = 0; k < 3; ++k) e.push_back({std::min(t[k], t[(k + 1) % 3]), std::max(t[k], t[(k + 1) % 3]), t[k]});
+  std::sort(e.begin(), e.end());
+  std::vector<std::uint32_t> next(m.positions.size(), kNo);
+  for (std::size_t i = 0; i < e.size(); ++i) {
+    const bool alone = (i == 0 || e[i - 1][0] != e[i][0] || e[i - 1][1] != e[i][1]) &&
+                       (i + 1 == e.size() || e[i + 1][0] != e[i][0] || e[i + 1][1] != e[i][1]);
+    if (!alone) continue;
+    const std::uint32_t from = e[i][2], to = from == e[i][0] ? e[i][1] : e[i][0];
+    if (next[from] != kNo) throw BridgeError("a boundary touches itself at a vertex");
+    next[from] = to;
+  }
+  return next;
+}
+
+struct CellHash {
+  std::size_t operator()(const glm::i64vec3& c) const { return std::size_t(c.x * 73856093 ^ c.y * 19349663 ^ c.z * 83492791); }
+};
+
+// The loop and position within it of the nearest patch boundary vertex within `reach`.
+struct Nearest {
+  std::uint32_t loop = kNo, at = 0;
+  double distance = std::numeric_limits<double>::infinity();
+};
+
+class PatchIndex {
+ public:
+  PatchIndex(const std::vector<glm::dvec3>& pos, const std::vector<std::vector<std::uint32_t>>& loops, double cell)
+      : pos_(pos), loops_(loops), cell_(cell) {
+    for (std::uint32_t l = 0; l < loops.size(); ++l)
+      for (std::uint32_t i = 0; i < loops[l].size(); ++i) grid_[key(pos[loops[l][i]])].push_back({l, i});
+  }
+  Nearest find(const glm::dvec3& p) const {
+    Nearest best;
+    const glm::i64vec3 c = key(p);
+    for (int dz = -1; dz <= 1; ++dz)
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          const auto it = grid_.find(c + glm::i64vec3(dx, dy, dz));
+          if (it == grid_.end()) continue;
+          for (const auto& [l, i] : it->second) {
+            const double d = glm::length(pos_[loops_[l][i]] - p);
+            if (d < best.distance) best = {l, i, d};
+          }
+        }
+    return best;
+  }
+
+ private:
+  glm::i64vec3 key(const glm::dvec3& p) const { return glm::i64vec3(glm::floor(p / cell_)); }
+  const std::vector<glm::dvec3>& pos_;
+  const std::vector<std::vector<std::uint32_t>>& loops_;
+  double cell_;
+  std::unordered_map<glm::i64vec3, std::vector<std::pair<std::uint32_t, std::uint32_t>>, CellHash> grid_;
+};
+
+glm::dvec3 normal(const std::vector<glm::dvec3>& pos, std::uint32_t a, std::uint32_t b, std::uint32_t c) {
+  const glm::dvec3 n = glm::cross(pos[b] - pos[a], pos[c] - pos[a]);
+  const double l = glm::length(n);
+  return l > 0 ? n / l : n;
+}
+
+// Arc length from the start to each vertex, as a fraction of the loop's length (n + 1 entries).
+std::vector<double> arc_fractions(const std::vector<glm::dvec3>& pos, std::size_t n, const auto& at) {
+  std::vector<double> s(n + 1, 0.0);
+  for (std::size_t k = 0; k < n; ++k) s[k + 1] = s[k] + glm::length(pos[at(k + 1)] - pos[at(k)]);
+  for (double& x : s) x /= s[n] > 0 ? s[n] : 1.0;
+  return s;
+}
+
+// The strip between loop a (walked forward) and loop b (walked backward from b[start]). Each
+// step advances the loop that lags behind in arc length (so loops sampled differently stay in
+// step), unless that triangle would turn against the surface beside it (`side`, the loops' own
+// vertex normals) and the other would not.
+std::vector<glm::uvec3> zip(const std::vector<glm::dvec3>& pos, const std::vector<glm::dvec3>& side,
+                            const std::vector<std::uint32_t>& a, const std::vector<std::uint32_t>& b,
+                            std::size_t start, double max_width, double& widest) {
+  const std::size_t m = a.size(), n = b.size();
+  auto A = [&](std::size_t i) { return a[i % m]; };
+  auto B = [&](std::size_t j) { return b[(start + n - j % n) % n]; };
+  const std::vector<double> sa = arc_fractions(pos, m, A), sb = arc_fractions(pos, n, B);
+  std::vector<glm::uvec3> out;
+  out.reserve(m + n);
+  std::size_t i = 0, j = 0;
+  while (i < m || j < n) {
+    const glm::dvec3 up = side[A(i)] + side[B(j)];
+    const bool a_ok = i < m && glm::dot(normal(pos, A(i + 1), A(i), B(j)), up) > 0;
+    const bool b_ok = j < n && glm::dot(normal(pos, B(j), B(j + 1), A(i)), up) > 0;
+    bool advance_a = j == n || (i < m && sa[i + 1] <= sb[j + 1]);
+    if (advance_a && !a_ok && b_ok) advance_a = false;
+    if (!advance_a && !b_ok && a_ok) advance_a = true;
+    const double d = advance_a ? glm::length(pos[A(i + 1)] - pos[B(j)]) : glm::length(pos[B(j + 1)] - pos[A(i)]);
+    widest = std::max(widest, d);
+    if (d > max_width) throw BridgeError("a band would span " + std::to_string(d) + ", wider than " + std::to_string(max_width));
+    if (advance_a) {
+      out.push_back({A(i + 1), A(i), B(j)});
+      ++i;
+    } else {
+      out.push_back({B(j), B(j + 1), A(i)});
+      ++j;
+    }
+  }
+  return out;
+}
+
+// Per vertex: the sum of the unit normals of its triangles (the direction of the surface there).
+std::vector<glm::dvec3> vertex_normals(const TriangleMesh& m) {
+  std::vector<glm::dvec3> n(m.positions.size(), glm::dvec3(0.0));
+  for (const glm::uvec3& t : m.triangles) {
+    const glm::dvec3 f = normal(m.positions, t[0], t[1], t[2]);
+    for (int k = 0; k < 3; ++k) n[t[k]] += f;
+  }
+  return n;
+}
+
+}  // namespace
+
+std::vector<std::vector<std::uint32_t>> boundary_loops(const TriangleMesh& mesh) {
+  std::vector<std::uint32_t> next = boundary_next(mesh);
+  std::vector<std::vector<std::uint32_t>> loops;
+  for (std::uint32_t v = 0; v < next.size(); ++v) {
+    if (next[v] == kNo) continue;
+    std::vector<std::uint32_t> loop;
+    for (std::uint32_t w = v; next[w] != kNo;) {
+      loop.push_back(w);
+      const std::uint32_t n = next[w];
+      next[w] = kNo;
+      w = n;
+    }
+    if (loop.size() < 3) throw BridgeError("a boundary loop of fewer than three edges");
+    loops.push_back(std::move(loop));
+  }
+  return loops;
+}
+
+TriangleMesh pull_back_boundary(const TriangleMesh& mesh) {
+  const std::vector<std::uint32_t> next = boundary_next(mesh);
+  std::vector<std::uint32_t> index(mesh.positions.size(), kNo);
+  TriangleMesh out;
+  for (const glm::uvec3& t : mesh.triangles) {
+    if (next[t[0]] != kNo || next[t[1]] != kNo || next[t[2]] != kNo) continue;
+    glm::uvec3 r;
+    for (int k = 0; k < 3; ++k) {
+      if (index[t[k]] == kNo) index[t[k]] = std::uint32_t(out.positions.size()), out.positions.push_back(mesh.positions[t[k]]);
+      r[k] = index[t[k]];
+    }
+    out.triangles.push_back(r);
+  }
+  // Keep the vertices' original order: renumber by source index.
+  std::vector<std::uint32_t> order;
+  for (std::uint32_t v = 0; v < index.size(); ++v)
+    if (index[v] != kNo) order.push_back(v);
+  std::vector<std::uint32_t> rank(out.positions.size());
+  for (std::uint32_t k = 0; k < order.size(); ++k) rank[index[order[k]]] = k;
+  TriangleMesh sorted;
+  sorted.positions.resize(out.positions.size());
+  for (std::uint32_t k = 0; k < order.size(); ++k) sorted.positions[k] = mesh.positions[order[k]];
+  sorted.triangles.reserve(out.triangles.size());
+  for (const glm::uvec3& t : out.triangles) sorted.triangles.push_back({rank[t[0]], rank[t[1]], rank[t[2]]});
+  return sorted;
+}
+
+TriangleMesh bridge(std::span<const TriangleMesh* const> operands, const TriangleMesh& patch, double max_width,
+                    BridgeStats* stats, std::uint32_t* patch_begin) {
+  TriangleMesh out;
+  for (const TriangleMesh* m : operands) append(out, *m);
+  const TriangleMesh ops = out;  // the operands alone, to find their loops
+  const std::uint32_t base = append(out, patch);
+  if (patch_begin) *patch_begin = base;
+
+  const auto op_loops = boundary_loops(ops);
+  auto patch_loops = boundary_loops(patch);
+  for (auto& l : patch_loops)
+    for (auto& v : l) v += base;
+  if (op_loops.size() != patch_loops.size())
+    throw BridgeError(std::to_string(op_loops.size()) + " operand loops face " + std::to_string(patch_loops.size()) + " patch loops");
+  const PatchIndex index(out.positions, patch_loops, max_width);
+  // Each operand loop faces the patch loop most of its vertices are nearest to.
+  std::vector<std::uint32_t> partner(op_loops.size(), kNo), taken(patch_loops.size(), 0);
+  std::vector<std::size_t> start(op_loops.size(), 0);
+  for (std::size_t l = 0; l < op_loops.size(); ++l) {
+    std::unordered_map<std::uint32_t, std::size_t> votes;
+    for (std::uint32_t v : op_loops[l]) {
+      const Nearest n = index.find(out.positions[v]);
+      if (n.loop != kNo) ++votes[n.loop];
+    }
+    std::size_t best = 0;
+    for (const auto& [loop, count] : votes)
+      if (count > best || (count == best && loop < partner[l])) best = count, partner[l] = loop;
+    if (partner[l] == kNo || 2 * best < op_loops[l].size()) throw BridgeError("an operand loop faces no patch loop");
+    if (taken[partner[l]]++) throw BridgeError("two operand loops face the same patch loop");
+    start[l] = index.find(out.positions[op_loops[l][0]]).at;
+    if (index.find(out.positions[op_loops[l][0]]).loop != partner[l])
+      throw BridgeError("an operand loop's first vertex faces another patch loop");
+  }
+  const std::vector<glm::dvec3> side = vertex_normals(out);
+  std::vector<std::vector<glm::uvec3>> bands(op_loops.size());
+  std::vector<double> widest(op_loops.size(), 0.0);
+  tbb::parallel_for(std::size_t(0), op_loops.size(), [&](std::size_t l) {
+    bands[l] = zip(out.positions, side, op_loops[l], patch_loops[partner[l]], start[l], max_width, widest[l]);
+  });
+  BridgeStats st;
+  st.loops = op_loops.size();
+  for (std::size_t l = 0; l < bands.size(); ++l) {
+    out.triangles.insert(out.triangles.end(), bands[l].begin(), bands[l].end());
+    st.band_triangles += bands[l].size();
+    st.widest = std::max(st.widest, widest[l]);
+  }
+  if (stats) *stats = st;
+  return out;
+}
+
+}  // namespace ht

@@ -1,0 +1,322 @@
+#include "meshers/local_ops.hpp"
+
+#include "meshers/cut.hpp"
+#include "meshers/relax.hpp"
+#include "meshers/warp_mesh.hpp"
+#include "meshers/bridge.hpp"
+#include "nodes/operators.hpp"
+#include "runtime/tape.hpp"
+#include "runtime/tape_eval.hpp"
+
+#include <glm/geometric.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <vector>
+
+namespace ht {
+namespace {
+
+// A node's field at points, exactly 0 outside its support box without running the tape there
+// (most of a large mesh leaf lies outside a small operand's support).
+class NodeField {
+ public:
+  NodeField(const LocalInput& in, NodeId node, bool under_blend)
+      : eval_(std::make_shared<const TapeEvaluator>(
+            std::make_shared<const Tape>(compile_tape(in.graph, node, in.threshold, nullptr, under_blend)))),
+        support_(in.graph->support(node, under_blend)) {}
+
+  void operator()(std::span<const glm::dvec3> points, std::span<double> values) const {
+    std::vector<glm::dvec3> inside;
+    std::vector<std::size_t> where;
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      values[i] = 0.0;
+      if (support_.contains(points[i])) {
+        inside.push_back(points[i]);
+        where.push_back(i);
+      }
+    }
+    std::vector<double> v(inside.size());
+    if (!inside.empty()) eval_->field(inside, v);
+    for (std::size_t k = 0; k < where.size(); ++k) values[where[k]] = v[k];
+  }
+  const Aabb& support() const { return support_; }
+
+ private:
+  std::shared_ptr<const TapeEvaluator> eval_;
+  Aabb support_;
+};
+
+// a * f + b: the cut functions of the Booleans (keep where a * f + b < 0).
+BatchField affine_of(const NodeField& f, double a, double b) {
+  return [f, a, b](std::span<const glm::dvec3> points, std::span<double> values) {
+    f(points, values);
+    for (double& v : values) v = a * v + b;
+  };
+}
+
+const TriangleMesh& operand(const LocalInput& in, std::size_t i) {
+  if (i >= in.child_meshes.size() || !in.child_meshes[i])
+    throw LocalFailure("operand " + std::to_string(i) + " has no mesh");
+  return *in.child_meshes[i];
+}
+
+// The operand's mesh with its edges longer than the precision split where `region` says the
+// other operands act (new vertices projected onto the operand's own surface): a coarse mesh's
+// long chords would otherwise cut a curved seam short. Vertices already there stay bit for bit.
+TriangleMesh refined(const TriangleMesh& mesh, const LocalInput& in, NodeId child, bool under_blend, const Aabb& region) {
+  const TapeEvaluator field(std::make_shared<const Tape>(compile_tape(in.graph, child, in.threshold, nullptr, under_blend)));
+  const Aabb box = region.expanded(in.precision);
+  return warp_mesh(mesh, [](const glm::dvec3& p) { return p; }, field, in.threshold, 1.5 * in.precision, nullptr, &box);
+}
+
+void flip(TriangleMesh& m) {
+  for (glm::uvec3& t : m.triangles) std::swap(t[1], t[2]);
+}
+
+bool overlaps(const Aabb& a, const Aabb& b) { return !intersect(a, b).empty(); }
+
+// The patch's cell size: the precision, or finer where the operands' meshes are finer inside
+// the patch's box, so that both sides of a seam sample it alike (the paper: "a sampling rate
+// that adapts to the length of the edges"). At most 4x finer.
+double patch_precision(const LocalInput& in, const Aabb& box) {
+  std::vector<double> lengths;
+  for (const auto& m : in.child_meshes) {
+    if (!m) continue;
+    for (const glm::uvec3& t : m->triangles) {
+      const glm::dvec3 a = m->positions[t[0]], b = m->positions[t[1]], c = m->positions[t[2]];
+      if (!box.contains((a + b + c) / 3.0)) continue;
+      lengths.push_back((glm::length(b - a) + glm::length(c - b) + glm::length(a - c)) / 3.0);
+    }
+  }
+  if (lengths.empty()) return in.precision;
+  std::nth_element(lengths.begin(), lengths.begin() + std::ptrdiff_t(lengths.size() / 2), lengths.end());
+  return std::clamp(lengths[lengths.size() / 2], 0.25 * in.precision, in.precision);
+}
+
+// The surface of the node itself, polygonized only inside `clip`, in the bricks `wanted` accepts.
+TriangleMesh patch(const LocalInput& in, const Aabb& clip, std::function<bool(const Aabb&)> wanted, LocalStats& st,
+                   bool sharp) {
+  PolygonizeOptions o = in.polygonize;
+  o.sharp_features = o.sharp_features && sharp;
+  o.precision = patch_precision(in, clip);
+  o.clip = clip;
+  o.brick_filter = std::move(wanted);
+  o.progress = {};
+  st.patched = true;
+  return polygonize(in.graph, in.node, in.threshold, o, &st.patch);
+}
+
+// Stitches the pieces. `onto_earlier` where they meet smoothly (blends), or where the earlier
+// piece's seam is exact and the later one's only near it (crop caps); not at Boolean creases.
+TriangleMesh join(std::vector<TriangleMesh>& pieces, const LocalInput& in, LocalStats& st, bool onto_earlier,
+                  std::vector<std::uint8_t>* seam = nullptr) {
+  std::vector<const TriangleMesh*> ptrs;
+  for (const TriangleMesh& p : pieces)
+    if (!p.triangles.empty()) ptrs.push_back(&p);
+  StitchOptions so;
+  so.max_gap = 0.75 * in.precision;
+  so.onto_earlier = onto_earlier;
+  return stitch(ptrs, so, &st.stitch, seam);
+}
+
+// The node's own field, where a result's vertices are projected back.
+std::shared_ptr<const TapeEvaluator> node_tape(const LocalInput& in) {
+  return std::make_shared<const TapeEvaluator>(std::make_shared<const Tape>(compile_tape(in.graph, in.node, in.threshold)));
+}
+
+// The operands' pieces as one mesh, in the order bridge() lays them out.
+TriangleMesh join_operands(const std::vector<const TriangleMesh*>& ops) {
+  TriangleMesh m;
+  for (const TriangleMesh* p : ops) append(m, *p);
+  return m;
+}
+
+// Evens out the band: the patch's vertices along it and one ring behind them move toward their
+// neighbours' centroid within the tangent plane and back onto the node's surface. The operands'
+// vertices stay where they are.
+void relax_band(TriangleMesh& m, std::uint32_t first_patch, const TapeEvaluator& field, double T) {
+  std::vector<std::uint8_t> band(m.positions.size(), 0), patch(m.positions.size(), 0);
+  for (const glm::uvec3& t : m.triangles) {
+    const bool mixed = (t[0] < first_patch || t[1] < first_patch || t[2] < first_patch) &&
+                       (t[0] >= first_patch || t[1] >= first_patch || t[2] >= first_patch);
+    if (mixed)
+      for (int k = 0; k < 3; ++k) band[t[k]] |= t[k] >= first_patch;
+  }
+  for (std::size_t v = first_patch; v < m.positions.size(); ++v) patch[v] = 1;
+  std::vector<std::uint8_t> movable = rings_around(m, band, patch, 1);
+  for (std::size_t v = 0; v < m.positions.size(); ++v) movable[v] |= band[v];
+  relax_vertices(m, movable, field, T);
+}
+
+std::size_t count_triangles(const std::vector<TriangleMesh>& pieces) {
+  std::size_t n = 0;
+  for (const TriangleMesh& p : pieces) n += p.triangles.size();
+  return n;
+}
+
+}  // namespace
+
+double blend_overlap(const Graph& g, NodeId n) {
+  const auto c = g.children_of(n);
+  auto volume = [](const Aabb& b) { return b.empty() ? 0.0 : b.size().x * b.size().y * b.size().z; };
+  double rho = 0.0;
+  for (std::size_t i = 0; i < c.size(); ++i)
+    for (std::size_t j = i + 1; j < c.size(); ++j) {
+      const Aabb& a = g.support(c[i], true);
+      const Aabb& b = g.support(c[j], true);
+      if (!a.finite() || !b.finite()) return 1.0;
+      const double both = volume(intersect(a, b)), either = volume(a) + volume(b) - both;
+      if (either > 0) rho = std::max(rho, both / either);
+    }
+  return rho;
+}
+
+TriangleMesh trim_boolean(const LocalInput& in, LocalStats* stats) {
+  LocalStats st;
+  const Graph& g = *in.graph;
+  const auto c = g.children_of(in.node);
+  if (c.size() != 2) throw LocalFailure("a Boolean of " + std::to_string(c.size()) + " operands (local meshing takes two)");
+  const NodeKind kind = g.kind[in.node];
+  const double T = in.threshold;
+  const NodeField fa(in, c[0], false), fb(in, c[1], false);
+  // Keep A where B does not change it, and B where A does not: outside the other for a union,
+  // inside it for an intersection; a difference keeps A outside B and B inside A, turned over.
+  const bool keep_a_outside = kind != NodeKind::Intersection;
+  const bool keep_b_outside = kind == NodeKind::Union;
+  std::vector<TriangleMesh> pieces;
+  const Aabb meet = intersect(fa.support(), fb.support());
+  pieces.push_back(cut_mesh(refined(operand(in, 0), in, c[0], false, meet),
+                            keep_a_outside ? affine_of(fb, 1, -T) : affine_of(fb, -1, T)));
+  pieces.push_back(cut_mesh(refined(operand(in, 1), in, c[1], false, meet),
+                            keep_b_outside ? affine_of(fa, 1, -T) : affine_of(fa, -1, T)));
+  if (kind == NodeKind::Difference) flip(pieces[1]);
+  st.operand_triangles = operand(in, 0).triangles.size() + operand(in, 1).triangles.size();
+  st.kept_triangles = count_triangles(pieces);
+  std::vector<std::uint8_t> seam;
+  TriangleMesh out = join(pieces, in, st, false, &seam);
+  untangle(out, seam, *node_tape(in), T);  // the seam is the crease: it stays
+  if (stats) *stats = st;
+  return out;
+}
+
+TriangleMesh trim_blend(const LocalInput& in, LocalStats* stats) {
+  LocalStats st;
+  const Graph& g = *in.graph;
+  const auto c = g.children_of(in.node);
+  if (c.size() > kMaxLocalBlendOperands)
+    throw LocalFailure("a blend of " + std::to_string(c.size()) + " operands (local meshing takes at most " +
+                       std::to_string(kMaxLocalBlendOperands) + ")");
+  std::vector<NodeField> fields;
+  for (NodeId child : c) fields.emplace_back(in, child, true);
+  // Below eps an operand's field moves the others' surfaces by at most eps / |grad f|.
+  const double eps = 1e-3 * in.threshold;
+  // g_i = total - |f_i| with total = sum |f_j|; mode i < n gives g_i, mode n gives min_i g_i.
+  auto others = [&fields](std::size_t mode, double eps_) -> BatchField {
+    return [&fields, mode, eps_](std::span<const glm::dvec3> points, std::span<double> values) {
+      std::vector<double> total(points.size(), 0.0), largest(points.size(), 0.0), own(points.size(), 0.0), f(points.size());
+      for (std::size_t j = 0; j < fields.size(); ++j) {
+        fields[j](points, f);
+        for (std::size_t k = 0; k < points.size(); ++k) {
+          total[k] += std::abs(f[k]);
+          largest[k] = std::max(largest[k], std::abs(f[k]));
+          if (j == mode) own[k] = std::abs(f[k]);
+        }
+      }
+      for (std::size_t k = 0; k < points.size(); ++k)
+        values[k] = mode < fields.size() ? (total[k] - own[k]) - eps_ : eps_ - (total[k] - largest[k]);
+    };
+  };
+  // New surface only where two supports meet.
+  std::vector<Aabb> meets;
+  Aabb clip;
+  for (std::size_t i = 0; i < c.size(); ++i)
+    for (std::size_t j = i + 1; j < c.size(); ++j) {
+      const Aabb both = intersect(fields[i].support(), fields[j].support());
+      if (!both.empty()) meets.push_back(both.expanded(2.0 * in.precision)), clip = merge(clip, meets.back());
+    }
+  std::vector<TriangleMesh> pieces;
+  for (std::size_t i = 0; i < c.size(); ++i) {
+    if (i < in.child_meshes.size() && in.child_meshes[i] && !in.child_meshes[i]->triangles.empty()) {
+      st.operand_triangles += in.child_meshes[i]->triangles.size();
+      const TriangleMesh& m = *in.child_meshes[i];
+      pieces.push_back(cut_mesh(clip.empty() ? m : refined(m, in, c[i], true, clip), others(i, eps)));
+    }
+  }
+  st.kept_triangles = count_triangles(pieces);
+  TriangleMesh out;
+  if (meets.empty()) {
+    out = join(pieces, in, st, true);  // nothing meets: the operands' meshes as they are
+  } else {
+    const TriangleMesh p = patch(in, clip, [meets](const Aabb& brick) {
+      return std::any_of(meets.begin(), meets.end(), [&](const Aabb& m) { return overlaps(m, brick); });
+    }, st, false);  // a blend is smooth where operands meet
+    const auto field = node_tape(in);
+    TriangleMesh band_side = pull_back_boundary(cut_mesh(p, others(c.size(), eps)));
+    relax_boundary(band_side, *field, in.threshold);
+    st.patch_triangles = band_side.triangles.size();
+    std::vector<const TriangleMesh*> ops;
+    for (const TriangleMesh& piece : pieces)
+      if (!piece.triangles.empty()) ops.push_back(&piece);
+    std::uint32_t first_patch = 0;
+    out = bridge(ops, band_side, 3.0 * in.precision, &st.bridge, &first_patch);
+    relax_band(out, first_patch, *field, in.threshold);
+    // The operands' trimmed edges stay; everything else may move to undo a fold.
+    std::vector<std::uint8_t> fixed(out.positions.size(), 0);
+    for (const auto& loop : boundary_loops(join_operands(ops)))
+      for (std::uint32_t v : loop) fixed[v] = 1;
+    untangle(out, fixed, *field, in.threshold);
+  }
+  if (stats) *stats = st;
+  return out;
+}
+
+TriangleMesh trim_crop(const LocalInput& in, LocalStats* stats) {
+  LocalStats st;
+  const Graph& g = *in.graph;
+  const NodeId child = g.children_of(in.node)[0];
+  const double* box6 = g.params_of(in.node).data();
+  const glm::dvec3 lo(box6[0], box6[1], box6[2]), hi(box6[3], box6[4], box6[5]);
+  const double T = in.threshold;
+  // The box itself as a cut: negative inside, zero on its faces.
+  const BatchField box_cut = [lo, hi](std::span<const glm::dvec3> points, std::span<double> values) {
+    for (std::size_t k = 0; k < points.size(); ++k) {
+      const glm::dvec3 d = glm::max(lo - points[k], points[k] - hi);
+      values[k] = std::max({d.x, d.y, d.z});
+    }
+  };
+  std::vector<TriangleMesh> pieces;
+  st.operand_triangles = operand(in, 0).triangles.size();
+  pieces.push_back(cut_mesh(operand(in, 0), box_cut));
+  st.kept_triangles = pieces[0].triangles.size();
+  // The caps: the crop's surface near the box's faces, where the box (not the child) bounds it.
+  const Aabb outer = Aabb{lo, hi}.expanded(2.0 * in.precision);
+  const Aabb inner{lo + 2.0 * in.precision, hi - 2.0 * in.precision};
+  const TriangleMesh p = patch(in, outer, [outer, inner](const Aabb& b) {
+    return overlaps(outer, b) && !(inner.contains(b.lo) && inner.contains(b.hi));
+  }, st, true);
+  const NodeField fc(in, child, false);
+  const std::vector<double> box(box6, box6 + 6);
+  const BatchField cap_cut = [fc, box, T](std::span<const glm::dvec3> points, std::span<double> values) {
+    fc(points, values);
+    for (std::size_t k = 0; k < points.size(); ++k) values[k] = crop_box_field(box.data(), T, points[k]) - values[k];
+  };
+  TriangleMesh caps = pull_back_boundary(cut_mesh(p, cap_cut));
+  st.patch_triangles = caps.triangles.size();
+  if (caps.triangles.empty()) {  // the box does not cut the child's surface
+    if (!boundary_loops(pieces[0]).empty()) throw LocalFailure("the box cuts the child's mesh but no cap was found");
+    if (stats) *stats = st;
+    return std::move(pieces[0]);
+  }
+  const auto field = node_tape(in);
+  relax_boundary(caps, *field, T);
+  const std::vector<const TriangleMesh*> ops = {&pieces[0]};
+  std::uint32_t first_patch = 0;
+  TriangleMesh out = bridge(ops, caps, 3.0 * in.precision, &st.bridge, &first_patch);
+  relax_band(out, first_patch, *field, T);
+  if (stats) *stats = st;
+  return out;
+}
+
+}  // namespace ht

@@ -1,0 +1,374 @@
+#include "meshers/mesh_plan.hpp"
+
+#include "meshers/ffd.hpp"
+#include "meshers/mesh_checks.hpp"
+#include "meshers/self_intersections.hpp"
+#include "meshers/sweep.hpp"
+#include "meshers/warp_mesh.hpp"
+#include "nodes/mesh_leaf.hpp"
+#include "runtime/tape.hpp"
+#include "runtime/tape_eval.hpp"
+
+#include <tbb/flow_graph.h>
+
+#include <chrono>
+#include <exception>
+#include <mutex>
+
+namespace ht {
+
+const char* to_string(JobStrategy s) {
+  switch (s) {
+    case JobStrategy::SharedLeaf: return "shared leaf mesh";
+    case JobStrategy::Sweep: return "sweep";
+    case JobStrategy::WarpedChild: return "warped child";
+    case JobStrategy::DeformedChild: return "deformed child (ffd)";
+    case JobStrategy::Global: return "global";
+    case JobStrategy::TrimBlend: return "trim blend";
+    case JobStrategy::TrimBoolean: return "trim boolean";
+    case JobStrategy::TrimCrop: return "trim crop";
+  }
+  return "?";
+}
+
+const char* to_string(JobReason r) {
+  switch (r) {
+    case JobReason::Kind: return "kind";
+    case JobReason::Hint: return "hint";
+    case JobReason::Requested: return "requested";
+    case JobReason::LowOverlap: return "low overlap";
+    case JobReason::HighOverlap: return "high overlap";
+    case JobReason::NoLocalMethod: return "no local method";
+    case JobReason::Fallback: return "fallback";
+  }
+  return "?";
+}
+
+namespace {
+
+constexpr std::uint32_t kNoJob = ~0u;
+
+struct Job {
+  NodeId node = kNone;
+  JobStrategy strategy = JobStrategy::Global;
+  JobReason reason = JobReason::Kind;
+  double rho = -1.0;
+  std::vector<std::uint32_t> deps;  // jobs whose results this one reads
+};
+
+// Walks the tree from the root once: one job per node reached.
+class Planner {
+ public:
+  Planner(const Graph& g, const MeshOptions& o) : g_(g), o_(o), job_of_(g.size(), kNoJob) {}
+
+  std::uint32_t need(NodeId n) {
+    if (job_of_[n] != kNoJob) return job_of_[n];
+    const std::uint32_t j = std::uint32_t(jobs.size());
+    job_of_[n] = j;
+    jobs.push_back(choose(n));
+    std::vector<std::uint32_t> deps;
+    const JobStrategy s = jobs[j].strategy;
+    if (s == JobStrategy::Global) {
+      std::vector<std::uint8_t> seen(g_.size(), 0);
+      ffds_under(n, seen, deps);
+    } else if (s != JobStrategy::SharedLeaf && s != JobStrategy::Sweep) {
+      for (NodeId c : g_.children_of(n)) deps.push_back(need(c));
+    }
+    jobs[j].deps = std::move(deps);
+    return j;
+  }
+  /// Only what the field needs: the ffd nodes under `root`.
+  void need_fields(NodeId root) {
+    std::vector<std::uint8_t> seen(g_.size(), 0);
+    std::vector<std::uint32_t> unused;
+    ffds_under(root, seen, unused);
+  }
+  std::vector<Job> jobs;
+
+ private:
+  // The unprepared ffds under n (n included), outermost first along each path: an ffd's own job
+  // takes care of what lies under it.
+  void ffds_under(NodeId n, std::vector<std::uint8_t>& seen, std::vector<std::uint32_t>& deps) {
+    if (seen[n]) return;
+    seen[n] = 1;
+    if (g_.kind[n] == NodeKind::Ffd && g_.mesh[n] == kNone) {
+      deps.push_back(need(n));
+      return;
+    }
+    for (NodeId c : g_.children_of(n)) ffds_under(c, seen, deps);
+  }
+
+  Job choose(NodeId n) const {
+    Job j;
+    j.node = n;
+    MeshStrategy want = o_.strategy;
+    JobReason why = want == MeshStrategy::Auto ? JobReason::Kind : JobReason::Requested;
+    if (g_.mesher[n] != MesherHint::Auto) {
+      want = g_.mesher[n] == MesherHint::Global ? MeshStrategy::Global : MeshStrategy::Local;
+      why = JobReason::Hint;
+    }
+    const NodeKind kind = g_.kind[n];
+    auto set = [&](JobStrategy s, JobReason r) {
+      j.strategy = s;
+      j.reason = r;
+      return j;
+    };
+    if (kind == NodeKind::Ffd) return set(g_.mesh[n] == kNone ? JobStrategy::DeformedChild : JobStrategy::SharedLeaf, JobReason::Kind);
+    if (want == MeshStrategy::Global) return set(JobStrategy::Global, why);
+    switch (kind_family(kind)) {
+      case Family::Mesh: return set(JobStrategy::SharedLeaf, why);
+      case Family::Primitive: return set(JobStrategy::Sweep, why);
+      case Family::Warp: return set(JobStrategy::WarpedChild, why);
+      case Family::Operator: break;
+    }
+    const std::size_t operands = g_.child_count[n];
+    switch (kind) {
+      case NodeKind::Blend: {
+        j.rho = blend_overlap(g_, n);
+        if (operands > kMaxLocalBlendOperands) return set(JobStrategy::Global, JobReason::NoLocalMethod);
+        if (want == MeshStrategy::Local) return set(JobStrategy::TrimBlend, why);
+        return j.rho > o_.blend_overlap ? set(JobStrategy::Global, JobReason::HighOverlap)
+                                         : set(JobStrategy::TrimBlend, JobReason::LowOverlap);
+      }
+      case NodeKind::Union:
+      case NodeKind::Intersection:
+      case NodeKind::Difference:
+        return operands == 2 ? set(JobStrategy::TrimBoolean, why) : set(JobStrategy::Global, JobReason::NoLocalMethod);
+      case NodeKind::Crop: return set(JobStrategy::TrimCrop, why);
+      default: return set(JobStrategy::Global, JobReason::NoLocalMethod);
+    }
+  }
+
+  const Graph& g_;
+  const MeshOptions& o_;
+  std::vector<std::uint32_t> job_of_;
+};
+
+double since(std::chrono::steady_clock::time_point t0) {
+  return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+}
+
+// Why a local result cannot be returned, or empty when it can.
+std::string local_defect(const TriangleMesh& m) {
+  const MeshChecks c = check_mesh(m);
+  std::string why;
+  auto add = [&](std::size_t n, const char* what) {
+    if (n) why += (why.empty() ? "" : ", ") + std::to_string(n) + " " + what;
+  };
+  add(c.boundary_edges, "boundary edges");
+  add(c.nonmanifold_edges, "non-manifold edges");
+  add(c.nonmanifold_vertices, "non-manifold vertices");
+  add(c.misoriented_edges, "misoriented edges");
+  add(c.degenerate_triangles, "degenerate triangles");
+  add(c.self_intersecting_pairs, "self-intersecting triangle pairs");
+  return why;
+}
+
+// Runs the jobs on a flow graph; each job reads the results of its deps only.
+class Runner {
+ public:
+  Runner(const Tree& tree, const MeshOptions& o, std::vector<Job> jobs)
+      : tree_(tree), o_(o), graph_(tree.graph_ptr()), jobs_(std::move(jobs)), meshes_(jobs_.size()),
+        reports_(jobs_.size()), errors_(jobs_.size()) {}
+
+  void run_all();
+  std::shared_ptr<const TriangleMesh> mesh(std::uint32_t j) const { return meshes_[j]; }
+  std::vector<NodeReport> reports() const;
+  std::shared_ptr<const Graph> graph() const { return graph_; }
+
+ private:
+  void run(std::uint32_t j);
+  std::shared_ptr<const TriangleMesh> execute(const Job& job, NodeReport& r);
+  std::shared_ptr<const TriangleMesh> global(NodeId n, const std::shared_ptr<const Graph>& g, NodeReport& r, bool report_progress);
+  std::shared_ptr<const TriangleMesh> trim(const Job& job, const std::shared_ptr<const Graph>& g, NodeReport& r);
+  std::shared_ptr<const Graph> current_graph() {
+    std::lock_guard lock(graph_mutex_);
+    return graph_;
+  }
+  const TriangleMesh& input(const Job& job, std::size_t i) const { return *meshes_[job.deps[i]]; }
+  bool cancelled() const { return o_.cancel && o_.cancel->load(std::memory_order_relaxed); }
+  void progress(double within_job);
+
+  const Tree& tree_;
+  const MeshOptions& o_;
+  std::mutex graph_mutex_, progress_mutex_;
+  std::shared_ptr<const Graph> graph_;
+  std::vector<Job> jobs_;
+  std::vector<std::shared_ptr<const TriangleMesh>> meshes_;
+  std::vector<NodeReport> reports_;
+  std::vector<std::exception_ptr> errors_;
+  std::atomic<std::size_t> done_{0};
+  double reported_ = 0.0;
+};
+
+void Runner::progress(double within_job) {
+  if (!o_.progress) return;
+  std::lock_guard lock(progress_mutex_);
+  const double f = std::min(1.0, (double(done_.load()) + within_job) / double(std::max<std::size_t>(1, jobs_.size())));
+  if (f <= reported_ && f < 1.0) return;
+  reported_ = f;
+  o_.progress(f);
+}
+
+void Runner::run(std::uint32_t j) {
+  const Job& job = jobs_[j];
+  for (std::uint32_t d : job.deps)
+    if (errors_[d]) {
+      errors_[j] = errors_[d];
+      return;
+    }
+  if (cancelled()) {
+    errors_[j] = std::make_exception_ptr(MeshCancelled("meshing was cancelled"));
+    return;
+  }
+  const auto t0 = std::chrono::steady_clock::now();
+  NodeReport& r = reports_[j];
+  r.node = job.node;
+  r.strategy = job.strategy;
+  r.reason = job.reason;
+  r.rho = job.rho;
+  try {
+    meshes_[j] = execute(job, r);
+    r.triangles = meshes_[j]->triangles.size();
+  } catch (...) {
+    errors_[j] = std::current_exception();
+  }
+  r.seconds = since(t0);
+  ++done_;
+  progress(0.0);
+}
+
+void Runner::run_all() {
+  tbb::flow::graph fg;
+  using Node = tbb::flow::continue_node<tbb::flow::continue_msg>;
+  std::vector<std::unique_ptr<Node>> nodes;
+  nodes.reserve(jobs_.size());
+  for (std::uint32_t j = 0; j < jobs_.size(); ++j)
+    nodes.push_back(std::make_unique<Node>(fg, [this, j](const tbb::flow::continue_msg&) { run(j); }));
+  for (std::uint32_t j = 0; j < jobs_.size(); ++j)
+    for (std::uint32_t d : jobs_[j].deps) tbb::flow::make_edge(*nodes[d], *nodes[j]);
+  for (std::uint32_t j = 0; j < jobs_.size(); ++j)
+    if (jobs_[j].deps.empty()) nodes[j]->try_put(tbb::flow::continue_msg());
+  fg.wait_for_all();
+  // The first error by job order (the order of the plan, not of completion).
+  for (const auto& e : errors_)
+    if (e) std::rethrow_exception(e);
+}
+
+std::vector<NodeReport> Runner::reports() const {
+  std::vector<NodeReport> out = reports_;
+  std::sort(out.begin(), out.end(), [](const NodeReport& a, const NodeReport& b) { return a.node < b.node; });
+  return out;
+}
+
+std::shared_ptr<const TriangleMesh> Runner::execute(const Job& job, NodeReport& r) {
+  const std::shared_ptr<const Graph> g = current_graph();
+  const NodeId n = job.node;
+  const double T = tree_.threshold(), h = o_.precision;
+  switch (job.strategy) {
+    case JobStrategy::SharedLeaf: return g->meshes[g->mesh[n]]->surface();
+    case JobStrategy::Global: return global(n, g, r, jobs_.size() == 1);
+    case JobStrategy::Sweep: {
+      auto mesh = std::make_shared<const TriangleMesh>(sweep_mesh(*g, n, T, h));
+      const std::size_t pairs = find_self_intersections(*mesh, 0).pairs;
+      if (pairs == 0) return mesh;
+      r.reason = JobReason::Fallback;
+      r.fallback_cause = "the sweep mesh overlaps itself (" + std::to_string(pairs) + " intersecting triangle pairs)";
+      r.strategy = JobStrategy::Global;
+      return global(n, g, r, false);
+    }
+    case JobStrategy::WarpedChild: {
+      const TapeEvaluator child_field(std::make_shared<const Tape>(compile_tape(g, g->children_of(n)[0], T)));
+      WarpRemeshStats ws;
+      auto mesh = std::make_shared<const TriangleMesh>(warp_mesh(input(job, 0), forward_map(*g, n), child_field, T, 1.5 * h, &ws));
+      r.edges_split = ws.edges_split;
+      return mesh;
+    }
+    case JobStrategy::DeformedChild: {
+      auto leaf = deform_child_mesh(*g, n, input(job, 0));
+      {
+        std::lock_guard lock(graph_mutex_);
+        graph_ = attach_ffd_mesh(*graph_, n, leaf);
+      }
+      return leaf->surface();
+    }
+    default: return trim(job, g, r);
+  }
+}
+
+std::shared_ptr<const TriangleMesh> Runner::global(NodeId n, const std::shared_ptr<const Graph>& g, NodeReport& r,
+                                                   bool report_progress) {
+  PolygonizeOptions p = o_.polygonize;
+  p.precision = o_.precision;
+  p.cancel = o_.cancel;
+  p.brick_filter = {};
+  p.progress = {};
+  if (report_progress && o_.progress) p.progress = [this](double f) { progress(std::min(f, 0.999)); };
+  r.polygonized = true;
+  return std::make_shared<const TriangleMesh>(polygonize(g, n, tree_.threshold(), p, &r.polygonize));
+}
+
+std::shared_ptr<const TriangleMesh> Runner::trim(const Job& job, const std::shared_ptr<const Graph>& g, NodeReport& r) {
+  std::vector<std::shared_ptr<const TriangleMesh>> children;
+  for (std::uint32_t d : job.deps) children.push_back(meshes_[d]);
+  LocalInput in;
+  in.graph = g;
+  in.node = job.node;
+  in.threshold = tree_.threshold();
+  in.precision = o_.precision;
+  in.child_meshes = children;
+  in.polygonize = o_.polygonize;
+  in.polygonize.cancel = o_.cancel;
+  std::string cause;
+  try {
+    TriangleMesh m = job.strategy == JobStrategy::TrimBlend     ? trim_blend(in, &r.local)
+                     : job.strategy == JobStrategy::TrimBoolean ? trim_boolean(in, &r.local)
+                                                                : trim_crop(in, &r.local);
+    r.polygonized = r.local.patched;
+    r.polygonize = r.local.patch;
+    cause = local_defect(m);
+    if (cause.empty()) return std::make_shared<const TriangleMesh>(std::move(m));
+    cause = "the result had " + cause;
+  } catch (const MeshCancelled&) {
+    throw;
+  } catch (const std::exception& e) {
+    cause = e.what();
+  }
+  r.reason = JobReason::Fallback;
+  r.fallback_cause = cause;
+  r.strategy = JobStrategy::Global;
+  return global(job.node, g, r, false);
+}
+
+void check_options(const MeshOptions& o) {
+  if (!(o.precision > 0.0) || !std::isfinite(o.precision)) throw PolygonizeError("precision must be a finite number > 0");
+  if (!(o.blend_overlap >= 0.0 && o.blend_overlap <= 1.0)) throw PolygonizeError("blend_overlap must be in [0, 1]");
+}
+
+}  // namespace
+
+MeshResult mesh_tree(const Tree& tree, const MeshOptions& options) {
+  check_options(options);
+  Planner plan(tree.graph(), options);
+  const std::uint32_t root = plan.need(tree.root());
+  Runner runner(tree, options, std::move(plan.jobs));
+  runner.run_all();
+  MeshResult result;
+  result.mesh = runner.mesh(root);
+  result.nodes = runner.reports();
+  result.tree.emplace(runner.graph(), tree.root(), tree.threshold(), tree.mesher_settings());
+  if (options.progress) options.progress(1.0);
+  return result;
+}
+
+Tree prepare_fields(const Tree& tree, const MeshOptions& options) {
+  if (!needs_ffd_preparation(tree.graph(), tree.root())) return tree;
+  check_options(options);
+  Planner plan(tree.graph(), options);
+  plan.need_fields(tree.root());
+  Runner runner(tree, options, std::move(plan.jobs));
+  runner.run_all();
+  return Tree(runner.graph(), tree.root(), tree.threshold(), tree.mesher_settings());
+}
+
+}  // namespace ht

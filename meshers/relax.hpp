@@ -1,0 +1,45 @@
+// Tangential relaxation with projection: the vertices a caller chooses move toward the centroid
+// of their neighbours within their tangent plane, then back onto the surface {f = T} by Newton
+// steps on a tape. The local strategies run it on the few rings of patch vertices next to a
+// seam, where moving the seam onto the exact operand's polyline left thin or folded triangles.
+//
+// Jacobi iterations (every vertex moves from the previous iteration's positions), so the result
+// does not depend on the order of vertices or on the thread count.
+#pragma once
+
+#include "meshers/triangle_mesh.hpp"
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+namespace ht {
+
+class TapeEvaluator;
+
+struct RelaxOptions {
+  int iterations = 4;
+  int newton_steps = 2;
+};
+
+/// Moves the vertices with movable[v] != 0; every other vertex stays bit for bit.
+void relax_vertices(TriangleMesh& mesh, std::span<const std::uint8_t> movable, const TapeEvaluator& field, double threshold,
+                    const RelaxOptions& options = {});
+
+/// Straightens every boundary loop of `mesh`: each loop vertex moves halfway toward the midpoint
+/// of its two loop neighbours, then back onto {f = T}; the vertices one ring inside follow by
+/// tangential relaxation, so the loop's own triangles do not fold.
+void relax_boundary(TriangleMesh& mesh, const TapeEvaluator& field, double threshold, int iterations = 3);
+
+/// Untangles a mesh locally: while some triangles intersect (meshers/self_intersections.hpp),
+/// their vertices and one ring around them, except the `fixed` ones, are relaxed as above. At
+/// most `rounds` rounds; returns the intersecting pairs left.
+std::size_t untangle(TriangleMesh& mesh, std::span<const std::uint8_t> fixed, const TapeEvaluator& field, double threshold,
+                     int rounds = 3);
+
+/// The vertices within `rings` edges of a seed, reached through vertices that `allowed` accepts;
+/// the seeds themselves are not included.
+std::vector<std::uint8_t> rings_around(const TriangleMesh& mesh, std::span<const std::uint8_t> seeds,
+                                       std::span<const std::uint8_t> allowed, int rings);
+
+}  // namespace ht

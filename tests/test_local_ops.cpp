@@ -1,0 +1,246 @@
+// The paper's local strategies, through the mesh plan: trimmed Booleans, blends and crops on
+// primitives and real meshes come out closed, oriented, manifold, free of self-intersections,
+// with the expected genus; they agree with the global polygonizer (Hausdorff distance within the
+// precision, volume within 1%), keep the untouched mesh-leaf vertices bit for bit, and give the
+// same bytes at any thread count.
+#include "meshers/mesh_checks.hpp"
+#include "meshers/mesh_plan.hpp"
+#include "nodes/mesh_leaf.hpp"
+#include "runtime/builder.hpp"
+#include "tests/support/random_tree.hpp"
+
+#include <glm/geometric.hpp>
+#include <glm/gtc/matrix_transform.hpp>
+#include <gtest/gtest.h>
+#include <tbb/global_control.h>
+
+#include <algorithm>
+#include <cstring>
+#include <set>
+
+using namespace ht;
+using glm::dvec3;
+
+namespace {
+
+constexpr double kT = 0.5;
+
+MeshOptions at(double h, MeshStrategy s = MeshStrategy::Auto) { return test::mesh_options(h, s); }
+
+std::shared_ptr<const MeshLeaf> bunny() {
+  static const auto leaf = MeshLeaf::load(test::cgal_mesh("bunny00.off"));
+  return leaf;
+}
+std::shared_ptr<const MeshLeaf> eight() {
+  static const auto leaf = MeshLeaf::load(test::cgal_mesh("eight.off"));
+  return leaf;
+}
+std::shared_ptr<const MeshLeaf> armadillo() {
+  static const auto leaf = MeshLeaf::load(test::cgal_mesh("armadillo.off"));
+  return leaf;
+}
+
+// The largest distance from samples of `a` (vertices and face centres) to the surface of `b`.
+double one_sided(const TriangleMesh& a, const TriangleMesh& b) {
+  const auto leaf = MeshLeaf::from_triangles(b.positions, b.triangles, "reference");
+  double worst = 0;
+  for (const dvec3& p : a.positions) worst = std::max(worst, leaf->query(p, 1e9).distance);
+  for (const auto& t : a.triangles)
+    worst = std::max(worst, leaf->query((a.positions[t[0]] + a.positions[t[1]] + a.positions[t[2]]) / 3.0, 1e9).distance);
+  return worst;
+}
+
+const NodeReport& report_of(const MeshResult& r, NodeId n) {
+  for (const NodeReport& e : r.nodes)
+    if (e.node == n) return e;
+  throw std::runtime_error("no job for the node");
+}
+
+// Meshes `root` locally and globally and holds the local result to the global one.
+struct Case {
+  const char* name;
+  long genus;
+  std::function<NodeId(Builder&)> make;
+  JobStrategy expect;
+};
+
+// A local result: the strategy asked for, closed, oriented, manifold, no self-intersection, the
+// expected genus, face centres on the surface, every vertex of the global result
+// within the precision of it, and the same volume to 1%. (The other direction of the Hausdorff
+// distance is not held to the precision: the global polygonizer chamfers the creases that the
+// local Booleans keep exact, by up to 1.4 h on "segment - sphere".)
+void expect_local(const MeshResult& r, const Tree& t, NodeId root, const Case& c, double h) {
+  const NodeReport& job = report_of(r, root);
+  EXPECT_EQ(job.strategy, c.expect) << c.name << ": " << to_string(job.strategy) << ", " << job.fallback_cause;
+  MeshChecks k = check_mesh(*r.mesh);
+  measure_surface_error(*r.mesh, t.evaluator(), kT, k);
+  EXPECT_TRUE(k.watertight()) << c.name << ": boundary " << k.boundary_edges << " non-manifold " << k.nonmanifold_edges
+                              << "/" << k.nonmanifold_vertices << " misoriented " << k.misoriented_edges << " degenerate "
+                              << k.degenerate_triangles;
+  EXPECT_EQ(k.self_intersecting_pairs, 0u) << c.name;
+  EXPECT_EQ(k.genus, c.genus) << c.name;
+  // Face centres: at a mesh leaf's own vertices the tape's gradient is not yet the one the scene
+  // format defines (issue 14), so |f - T| / |grad f| is no distance estimate there.
+  EXPECT_LT(k.face_error_max, 0.25 * h) << c.name;
+  const MeshResult g = mesh_tree(t, at(h, MeshStrategy::Global));
+  const MeshChecks kg = check_mesh(*g.mesh);
+  EXPECT_NEAR(k.volume, kg.volume, 0.01 * std::abs(kg.volume)) << c.name;
+  EXPECT_LE(one_sided(*g.mesh, *r.mesh), h) << c.name;
+}
+
+void run_cases(const std::vector<Case>& cases, double h) {
+  for (const Case& c : cases) {
+    Builder b(kT);
+    const NodeId root = c.make(b);
+    const Tree t = b.build(root);
+    const MeshResult r = mesh_tree(t, at(h));
+    expect_local(r, t, root, c, h);
+  }
+}
+
+// bunny00's left ear tip is near (-0.005, 0.494, -0.12).
+constexpr dvec3 kEar{-0.005, 0.5, -0.12};
+
+}  // namespace
+
+TEST(LocalBooleans, PrimitivesAndMeshLeaves) {
+  const std::vector<Case> cases = {
+      {"sphere u sphere", 0, [](Builder& b) { return b.unite({b.point({0, 0, 0}, {1.0}), b.point({0.5, 0.1, 0}, {0.8})}); },
+       JobStrategy::TrimBoolean},
+      {"sphere n segment", 0,
+       [](Builder& b) { return b.intersect({b.point({0, 0, 0}, {1.0}), b.segment({-1, 0, 0}, {1, 0, 0}, {0.5})}); },
+       JobStrategy::TrimBoolean},
+      {"segment - sphere", 0,
+       [](Builder& b) { return b.subtract({b.segment({-0.6, 0, 0}, {0.6, 0, 0}, {0.6}), b.point({0.6, 0, 0}, {0.7})}); },
+       JobStrategy::TrimBoolean},
+      {"bunny u sphere", 0, [](Builder& b) { return b.unite({b.mesh(bunny(), {0.05}), b.point(kEar, {0.12})}); },
+       JobStrategy::TrimBoolean},
+      {"bunny - sphere", 0, [](Builder& b) { return b.subtract({b.mesh(bunny(), {0.05}), b.point({0.1, 0.1, 0.3}, {0.35})}); },
+       JobStrategy::TrimBoolean},
+      {"eight u sphere", 2, [](Builder& b) { return b.unite({b.mesh(eight(), {0.05}), b.point({0.2, 0, 0.1}, {0.2})}); },
+       JobStrategy::TrimBoolean},
+  };
+  run_cases(cases, 0.01);
+}
+
+TEST(LocalBlends, PrimitivesAndMeshLeaves) {
+  const std::vector<Case> cases = {
+      {"segment + sphere", 0, [](Builder& b) { return b.blend({b.segment({-1, 0, 0}, {0, 0, 0}, {0.5}), b.point({0.6, 0.2, 0}, {0.5})}); },
+       JobStrategy::TrimBlend},
+      {"bunny + sphere", 0, [](Builder& b) { return b.blend({b.mesh(bunny(), {0.05}), b.point(kEar, {0.12})}); },
+       JobStrategy::TrimBlend},
+      {"bunny + carving", 0,
+       [](Builder& b) { return b.blend({b.mesh(bunny(), {0.05}), b.point({0.0, 0.1, 0.3}, {0.2, -1.5})}); },
+       JobStrategy::TrimBlend},
+      {"eight + segment", 2,
+       [](Builder& b) { return b.blend({b.mesh(eight(), {0.05}), b.segment({0.2, 0, -0.3}, {0.5, 0, -0.3}, {0.12})}); },
+       JobStrategy::TrimBlend},
+  };
+  run_cases(cases, 0.01);
+}
+
+// Where a local strategy cannot make a sound mesh, the node is polygonized globally and the
+// report says why. These are the cases known to need that today (see the closing note of the
+// Meshing II issue): a coarse operand whose triangles hide a small excursion of the other's
+// surface (the level-set cut samples at vertices), and crops, whose caps the polygonized patch
+// does not yet join to the exact cut. When one starts to succeed, move it to the lists above.
+TEST(LocalStrategies, FallBackWhereTheyCannot) {
+  const std::vector<Case> cases = {
+      {"bunny n box", 0,
+       [](Builder& b) { return b.intersect({b.mesh(bunny(), {0.05}), b.box({-0.3, -0.6, -0.5}, {0.6, 0.2, 0.5}, {0.1})}); },
+       JobStrategy::TrimBoolean},
+      {"cropped sphere", 0, [](Builder& b) { return b.crop(b.point({0, 0, 0}, {1.0}), {-1, -1, -0.2}, {1, 0.3, 1}); },
+       JobStrategy::TrimCrop},
+      {"cropped bunny", 0, [](Builder& b) { return b.crop(b.mesh(bunny(), {0.05}), {-0.6, -0.1, -0.5}, {0.6, 0.6, 0.5}); },
+       JobStrategy::TrimCrop},
+  };
+  for (const Case& c : cases) {
+    Builder b(kT);
+    const NodeId root = c.make(b);
+    const MeshResult r = mesh_tree(b.build(root), at(0.01));
+    const NodeReport& job = report_of(r, root);
+    EXPECT_EQ(job.strategy, JobStrategy::Global) << c.name;
+    EXPECT_EQ(job.reason, JobReason::Fallback) << c.name;
+    EXPECT_FALSE(job.fallback_cause.empty()) << c.name;
+    EXPECT_TRUE(check_mesh(*r.mesh).watertight()) << c.name;
+  }
+}
+
+TEST(LocalStrategies, UntouchedMeshLeafVerticesAreBitIdentical) {
+  Builder b(kT);
+  const NodeId sphere = b.point(kEar, {0.12});
+  const NodeId root = b.blend({b.mesh(bunny(), {0.05}), sphere});
+  const Tree t = b.build(root);
+  const MeshResult r = mesh_tree(t, at(0.01));
+  ASSERT_EQ(report_of(r, root).strategy, JobStrategy::TrimBlend);
+  auto key = [](const dvec3& p) {
+    std::array<std::uint64_t, 3> k;
+    std::memcpy(k.data(), &p, sizeof p);
+    return k;
+  };
+  std::set<std::array<std::uint64_t, 3>> out;
+  for (const dvec3& p : r.mesh->positions) out.insert(key(p));
+  const Aabb& reach = t.graph().support(sphere, true);
+  std::size_t outside = 0, kept = 0;
+  for (const dvec3& p : bunny()->positions()) {
+    if (reach.expanded(0.02).contains(p)) continue;
+    ++outside;
+    kept += out.count(key(p));
+  }
+  EXPECT_GT(outside, 30000u);
+  EXPECT_EQ(kept, outside);
+}
+
+TEST(LocalStrategies, SameBytesAtOneAndTwoThreads) {
+  Builder b(kT);
+  const NodeId wing = b.crop(b.affine(b.mesh(armadillo(), {0.05}), glm::scale(glm::dmat4(1.0), dvec3(0.005))),
+                             {-0.35, 0.0, -0.3}, {0.35, 0.5, 0.3});
+  const NodeId root = b.blend({b.mesh(bunny(), {0.05}), b.unite({wing, b.point(kEar, {0.12})})});
+  const Tree t = b.build(root);
+  std::shared_ptr<const TriangleMesh> one, two;
+  {
+    tbb::global_control c(tbb::global_control::max_allowed_parallelism, 1);
+    one = mesh_tree(t, at(0.01)).mesh;
+  }
+  {
+    tbb::global_control c(tbb::global_control::max_allowed_parallelism, 2);
+    two = mesh_tree(t, at(0.01)).mesh;
+  }
+  ASSERT_EQ(one->positions.size(), two->positions.size());
+  ASSERT_EQ(one->triangles.size(), two->triangles.size());
+  EXPECT_EQ(0, std::memcmp(one->positions.data(), two->positions.data(), one->positions.size() * sizeof(dvec3)));
+  EXPECT_EQ(0, std::memcmp(one->triangles.data(), two->triangles.data(), one->triangles.size() * sizeof(glm::uvec3)));
+}
+
+TEST(LocalStrategies, RandomTreesWithMeshLeavesStayClosed) {
+  test::Rng rng(0x10ca1);
+  test::RandomTreeOptions o;
+  o.max_depth = 3;
+  o.meshes = {eight(), MeshLeaf::load(test::cgal_mesh("sphere.off"))};
+  std::size_t jobs = 0, fallbacks = 0, local = 0;
+  std::map<std::string, int> causes;
+  for (int i = 0; i < 24; ++i) {
+    Builder b(kT);
+    const NodeId root = test::random_tree(b, rng, o);
+    const Tree t = b.build(root);
+    for (MeshStrategy s : {MeshStrategy::Auto, MeshStrategy::Local}) {
+      MeshResult r;
+      try {
+        r = mesh_tree(t, at(0.06, s));
+      } catch (const PolygonizeError& e) {
+        continue;  // unbounded solids (blends over R-function differences) are refused
+      }
+      const MeshChecks k = check_mesh(*r.mesh);
+      EXPECT_TRUE(k.watertight()) << "tree " << i;
+      for (const NodeReport& e : r.nodes) {
+        ++jobs;
+        if (e.reason == JobReason::Fallback) ++fallbacks, ++causes[e.fallback_cause.substr(0, 40)];
+        if (e.strategy == JobStrategy::TrimBlend || e.strategy == JobStrategy::TrimBoolean || e.strategy == JobStrategy::TrimCrop)
+          ++local;
+      }
+    }
+  }
+  std::printf("random trees: %zu jobs, %zu local results, %zu fallbacks\n", jobs, local, fallbacks);
+  for (const auto& [cause, n] : causes) std::printf("  %3d  %s\n", n, cause.c_str());
+  EXPECT_GT(local, 0u);
+}
