@@ -106,8 +106,10 @@ std::size_t snap_vertices(std::vector<glm::dvec3>& pos, std::vector<std::int8_t>
   std::vector<std::uint8_t> end(pos.size(), 0);
   for (std::uint32_t i = 0; i < x.keys.size(); ++i) {
     const double t = x.t[i];
-    if (t < best[x.kept_end[i]]) best[x.kept_end[i]] = t, pick[x.kept_end[i]] = i, end[x.kept_end[i]] = 0;
-    if (1.0 - t < best[x.cut_end[i]]) best[x.cut_end[i]] = 1.0 - t, pick[x.cut_end[i]] = i, end[x.cut_end[i]] = 1;
+    const double len = glm::length(pos[x.cut_end[i]] - pos[x.kept_end[i]]);
+    const std::uint32_t a = x.kept_end[i], b = x.cut_end[i];
+    if (t < best[a] && t * len <= o.snap_distance) best[a] = t, pick[a] = i, end[a] = 0;
+    if (1.0 - t < best[b] && (1.0 - t) * len <= o.snap_distance) best[b] = 1.0 - t, pick[b] = i, end[b] = 1;
   }
   const std::vector<glm::dvec3> before = pos;
   std::size_t moved = 0;

@@ -15,6 +15,7 @@
 #include "meshers/triangle_mesh.hpp"
 
 #include <functional>
+#include <limits>
 #include <span>
 
 namespace ht {
@@ -24,8 +25,11 @@ namespace ht {
 using BatchField = std::function<void(std::span<const glm::dvec3> points, std::span<double> values)>;
 
 struct CutOptions {
-  /// A vertex with a root of c within this fraction of one of its edges moves onto that root.
+  /// A vertex with a root of c within this fraction of one of its edges moves onto that root...
   double snap = 0.2;
+  /// ... if that is no farther than this (world units): moving a vertex bends its other faces,
+  /// which on a coarse mesh would leave the surface by a fraction of its long edges.
+  double snap_distance = std::numeric_limits<double>::infinity();
   int refine_steps = 20;        ///< at most this many false-position steps per crossing edge
   double refine_tolerance = 1e-4;  ///< of c's change along the edge, or of the edge's length
 };

@@ -4,6 +4,7 @@
 #include "meshers/relax.hpp"
 #include "meshers/warp_mesh.hpp"
 #include "meshers/bridge.hpp"
+#include "meshers/caps.hpp"
 #include "nodes/operators.hpp"
 #include "runtime/tape.hpp"
 #include "runtime/tape_eval.hpp"
@@ -54,6 +55,13 @@ BatchField affine_of(const NodeField& f, double a, double b) {
     f(points, values);
     for (double& v : values) v = a * v + b;
   };
+}
+
+// Cuts snap vertices by at most a tenth of the precision (see CutOptions::snap_distance).
+CutOptions cut_options(const LocalInput& in) {
+  CutOptions o;
+  o.snap_distance = 0.1 * in.precision;
+  return o;
 }
 
 const TriangleMesh& operand(const LocalInput& in, std::size_t i) {
@@ -188,9 +196,9 @@ TriangleMesh trim_boolean(const LocalInput& in, LocalStats* stats) {
   std::vector<TriangleMesh> pieces;
   const Aabb meet = intersect(fa.support(), fb.support());
   pieces.push_back(cut_mesh(refined(operand(in, 0), in, c[0], false, meet),
-                            keep_a_outside ? affine_of(fb, 1, -T) : affine_of(fb, -1, T)));
+                            keep_a_outside ? affine_of(fb, 1, -T) : affine_of(fb, -1, T), cut_options(in)));
   pieces.push_back(cut_mesh(refined(operand(in, 1), in, c[1], false, meet),
-                            keep_b_outside ? affine_of(fa, 1, -T) : affine_of(fa, -1, T)));
+                            keep_b_outside ? affine_of(fa, 1, -T) : affine_of(fa, -1, T), cut_options(in)));
   if (kind == NodeKind::Difference) flip(pieces[1]);
   st.operand_triangles = operand(in, 0).triangles.size() + operand(in, 1).triangles.size();
   st.kept_triangles = count_triangles(pieces);
@@ -241,7 +249,7 @@ TriangleMesh trim_blend(const LocalInput& in, LocalStats* stats) {
     if (i < in.child_meshes.size() && in.child_meshes[i] && !in.child_meshes[i]->triangles.empty()) {
       st.operand_triangles += in.child_meshes[i]->triangles.size();
       const TriangleMesh& m = *in.child_meshes[i];
-      pieces.push_back(cut_mesh(clip.empty() ? m : refined(m, in, c[i], true, clip), others(i, eps)));
+      pieces.push_back(cut_mesh(clip.empty() ? m : refined(m, in, c[i], true, clip), others(i, eps), cut_options(in)));
     }
   }
   st.kept_triangles = count_triangles(pieces);
@@ -253,7 +261,7 @@ TriangleMesh trim_blend(const LocalInput& in, LocalStats* stats) {
       return std::any_of(meets.begin(), meets.end(), [&](const Aabb& m) { return overlaps(m, brick); });
     }, st, false);  // a blend is smooth where operands meet
     const auto field = node_tape(in);
-    TriangleMesh band_side = pull_back_boundary(cut_mesh(p, others(c.size(), eps)));
+    TriangleMesh band_side = pull_back_boundary(cut_mesh(p, others(c.size(), eps), cut_options(in)));
     relax_boundary(band_side, *field, in.threshold);
     st.patch_triangles = band_side.triangles.size();
     std::vector<const TriangleMesh*> ops;
@@ -275,10 +283,8 @@ TriangleMesh trim_blend(const LocalInput& in, LocalStats* stats) {
 TriangleMesh trim_crop(const LocalInput& in, LocalStats* stats) {
   LocalStats st;
   const Graph& g = *in.graph;
-  const NodeId child = g.children_of(in.node)[0];
   const double* box6 = g.params_of(in.node).data();
   const glm::dvec3 lo(box6[0], box6[1], box6[2]), hi(box6[3], box6[4], box6[5]);
-  const double T = in.threshold;
   // The box itself as a cut: negative inside, zero on its faces.
   const BatchField box_cut = [lo, hi](std::span<const glm::dvec3> points, std::span<double> values) {
     for (std::size_t k = 0; k < points.size(); ++k) {
@@ -286,35 +292,16 @@ TriangleMesh trim_crop(const LocalInput& in, LocalStats* stats) {
       values[k] = std::max({d.x, d.y, d.z});
     }
   };
-  std::vector<TriangleMesh> pieces;
   st.operand_triangles = operand(in, 0).triangles.size();
-  pieces.push_back(cut_mesh(operand(in, 0), box_cut));
-  st.kept_triangles = pieces[0].triangles.size();
-  // The caps: the crop's surface near the box's faces, where the box (not the child) bounds it.
-  const Aabb outer = Aabb{lo, hi}.expanded(2.0 * in.precision);
-  const Aabb inner{lo + 2.0 * in.precision, hi - 2.0 * in.precision};
-  const TriangleMesh p = patch(in, outer, [outer, inner](const Aabb& b) {
-    return overlaps(outer, b) && !(inner.contains(b.lo) && inner.contains(b.hi));
-  }, st, true);
-  const NodeField fc(in, child, false);
-  const std::vector<double> box(box6, box6 + 6);
-  const BatchField cap_cut = [fc, box, T](std::span<const glm::dvec3> points, std::span<double> values) {
-    fc(points, values);
-    for (std::size_t k = 0; k < points.size(); ++k) values[k] = crop_box_field(box.data(), T, points[k]) - values[k];
-  };
-  TriangleMesh caps = pull_back_boundary(cut_mesh(p, cap_cut));
-  st.patch_triangles = caps.triangles.size();
-  if (caps.triangles.empty()) {  // the box does not cut the child's surface
-    if (!boundary_loops(pieces[0]).empty()) throw LocalFailure("the box cuts the child's mesh but no cap was found");
-    if (stats) *stats = st;
-    return std::move(pieces[0]);
+  TriangleMesh out = cut_mesh(operand(in, 0), box_cut, cut_options(in));
+  st.kept_triangles = out.triangles.size();
+  CapStats caps;
+  try {
+    cap_box_openings(out, Aabb{lo, hi}, 1e-3 * in.precision, &caps);
+  } catch (const CapError& e) {
+    throw LocalFailure(e.what());
   }
-  const auto field = node_tape(in);
-  relax_boundary(caps, *field, T);
-  const std::vector<const TriangleMesh*> ops = {&pieces[0]};
-  std::uint32_t first_patch = 0;
-  TriangleMesh out = bridge(ops, caps, 3.0 * in.precision, &st.bridge, &first_patch);
-  relax_band(out, first_patch, *field, T);
+  st.patch_triangles = caps.triangles;
   if (stats) *stats = st;
   return out;
 }

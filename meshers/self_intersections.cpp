@@ -82,10 +82,9 @@ void add_det3(Expansion& e, const dvec3& p, const dvec3& q, const dvec3& r, bool
   e.add_product(p.z, q.y, r.x, !negate);
 }
 
-/// Sign of det[b-a; c-a; d-a], exactly. When the nine differences are exact (typical of nearby
-/// mesh vertices) it is det[u; v; w] of them: six products. Otherwise the determinant is
-/// expanded by multilinearity into ones of the inputs themselves (no rounded differences):
-/// det(bcd) - det(acd) + det(abd) - det(abc), 24 products.
+/// Sign of det[b-a; c-a; d-a], exactly: det[u; v; w] of the differences when all nine are exact
+/// (typical of nearby vertices), six products; else, by multilinearity, determinants of the
+/// inputs themselves: det(bcd) - det(acd) + det(abd) - det(abc), 24 products.
 int orient3d_exact(const dvec3& a, const dvec3& b, const dvec3& c, const dvec3& d) {
   Expansion e;
   dvec3 u, v, w;
@@ -124,22 +123,19 @@ int orient2d_exact(const dvec3& a, const dvec3& b, const dvec3& c, int i, int j)
 
 constexpr double kUnitRoundoff = std::numeric_limits<double>::epsilon() / 2;
 
-/// A rounded difference is zero exactly when the exact one is, so a determinant of differences
-/// whose every product has a factor that is zero is exactly zero.
-inline bool zero_factor(double x, double y) { return x == 0 || y == 0; }
-
-/// Whether every product of det[u; v; w] = w . (u x v) has a factor that is zero.
+/// Whether every product of det[u; v; w] = w . (u x v) has a factor that is zero: then it is
+/// exactly zero, as a rounded difference is zero exactly when the exact one is.
 bool zero_terms(const dvec3& u, const dvec3& v, const dvec3& w) {
-  return (w.x == 0 || (zero_factor(u.y, v.z) && zero_factor(u.z, v.y))) &&
-         (w.y == 0 || (zero_factor(u.z, v.x) && zero_factor(u.x, v.z))) &&
-         (w.z == 0 || (zero_factor(u.x, v.y) && zero_factor(u.y, v.x)));
+  const auto z = [](double x, double y) { return x == 0 || y == 0; };
+  return (w.x == 0 || (z(u.y, v.z) && z(u.z, v.y))) && (w.y == 0 || (z(u.z, v.x) && z(u.x, v.z))) &&
+         (w.z == 0 || (z(u.x, v.y) && z(u.y, v.x)));
 }
 
 /// Sign of det[b-a; c-a; d-a]: positive when d lies on the side of plane abc that the normal
 /// (b-a) x (c-a) points to. The double evaluation errs by at most about 7u times the permanent
 /// (u the unit roundoff); below 16u times it the sign is recomputed exactly. A permanent of zero
-/// is decided on the spot when every term has a zero factor (four points in a coordinate plane:
-/// the flat faces of axis-aligned shapes, where this case dominates).
+/// is decided on the spot when every term has a zero factor (say, four points in a coordinate
+/// plane), which the error bound alone cannot tell from a tiny nonzero value.
 int orient3d(const dvec3& a, const dvec3& b, const dvec3& c, const dvec3& d) {
   const dvec3 u = b - a, v = c - a, w = d - a;
   const double x1 = u.y * v.z, x2 = u.z * v.y, y1 = u.z * v.x, y2 = u.x * v.z;
@@ -180,7 +176,7 @@ struct Tri {
 int side(const Tri& t, const dvec3& q) {
   if (t.flat < 0) return orient3d(t.v[0], t.v[1], t.v[2], q);
   const double d = q[t.flat], c = t.v[0][t.flat];
-  return d > c ? t.sign : d < c ? -t.sign : 0;
+  return d > c ? t.sign : d < c ? -t.sign : 0;  // exact: comparisons
 }
 
 /// The triangle, with the axis to drop for 2D tests: the largest normal component first, and
@@ -205,7 +201,6 @@ Tri make_tri(const TriangleMesh& mesh, std::uint32_t t) {
 
 /// Three orientations not mixing strict signs, zeros allowed: inside a closed region.
 bool agree(int s0, int s1, int s2) { return (s0 >= 0 && s1 >= 0 && s2 >= 0) || (s0 <= 0 && s1 <= 0 && s2 <= 0); }
-
 /// All three strictly on one side.
 bool one_side(const int s[3]) { return (s[0] > 0 && s[1] > 0 && s[2] > 0) || (s[0] < 0 && s[1] < 0 && s[2] < 0); }
 
@@ -246,10 +241,10 @@ bool tri_tri_2d(const Tri& a, const Tri& b, Proj p) {
   return !edge_separates(a, b.v, 3, p) && !edge_separates(b, a.v, 3, p);
 }
 
-/// Coplanar triangles sharing corner a.v[k] == b.v[l] meet beyond it exactly when their corner
-/// wedges there share a direction (their intersection is convex and holds the corner). Wedges
-/// narrower than a half-turn overlap exactly when a side ray of one lies in the other; with
-/// both wedges counter-clockwise that takes four orientations about the corner.
+/// Coplanar triangles sharing corner a.v[k] == b.v[l] meet beyond it exactly when their wedges
+/// there share a direction (their intersection is convex and holds the corner). Wedges narrower
+/// than a half-turn do exactly when a side ray of one lies in the other: with both wedges
+/// counter-clockwise, four orientations about the corner.
 bool wedges_overlap(const Tri& a, int k, const Tri& b, int l, Proj p) {
   const int ka = orientation_2d(a, p) > 0 ? 1 : 2, kb = orientation_2d(b, p) > 0 ? 1 : 2;
   const dvec3 &v = a.v[k], &a1 = a.v[(k + ka) % 3], &a2 = a.v[(k + 3 - ka) % 3];
@@ -289,9 +284,9 @@ bool tri_tri(const Tri& a, const Tri& b) {
 }
 
 /// Triangles sharing only corner a.v[k] == b.v[l]. Their intersection is convex and holds that
-/// corner; if it holds more it reaches the opposite edge of one of them. Either pair of other
-/// corners strictly on one side of the other's plane settles it first (the common case); both
-/// on the plane makes them coplanar, a wedge test.
+/// corner; if it holds more it reaches the opposite edge of one of them. The other corners of
+/// one strictly on one side of the other's plane settle it first (the common case); both on it:
+/// coplanar, a wedge test.
 bool share_corner(const Tri& a, int k, const Tri& b, int l) {
   const dvec3 &a1 = a.v[(k + 1) % 3], &a2 = a.v[(k + 2) % 3], &b1 = b.v[(l + 1) % 3], &b2 = b.v[(l + 2) % 3];
   const int s1 = side(a, b1), s2 = side(a, b2);

@@ -17,7 +17,12 @@
 // counts are still tested here, exactly.
 //
 // Exactness: orientation tests are evaluated in double with a static error bound and, when the
-// bound cannot decide the sign, recomputed exactly with floating-point expansion arithmetic.
+// bound cannot decide the sign, recomputed exactly with floating-point expansion arithmetic
+// (over the coordinate differences when those are exact, as for nearby vertices, else over the
+// coordinates). Exact zeros that are common in meshes are decided without expansions: a point
+// against a triangle lying in a coordinate plane is one comparison, and a determinant whose
+// terms all have a zero factor is zero. Pairs sharing a vertex or an edge, and coplanar pairs,
+// take a few orientation tests each (a wedge test at a shared corner, separating edge lines).
 // The result is exact for finite coordinates whose products of three neither overflow nor
 // underflow (magnitudes roughly within [1e-100, 1e100], or zero).
 #pragma once

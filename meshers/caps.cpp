@@ -1,0 +1,166 @@
+#include "meshers/caps.hpp"
+
+#include "meshers/bridge.hpp"
+
+#include <glm/vec2.hpp>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <map>
+#include <vector>
+
+namespace ht {
+namespace {
+
+// A face of the box: the axis it is normal to and which end (outward normal +axis when hi).
+struct Face {
+  int axis = 0;
+  bool hi = false;
+  double value = 0;
+};
+
+double cross2(glm::dvec2 a, glm::dvec2 b, glm::dvec2 c) { return (b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x); }
+
+// The face a loop lies on, or throws.
+Face face_of(const TriangleMesh& m, const std::vector<std::uint32_t>& loop, const Aabb& box, double tol) {
+  Face best;
+  double best_dev = tol;
+  bool found = false;
+  for (int axis = 0; axis < 3; ++axis)
+    for (bool hi : {false, true}) {
+      const double v = hi ? box.hi[axis] : box.lo[axis];
+      double dev = 0;
+      for (std::uint32_t i : loop) dev = std::max(dev, std::abs(m.positions[i][axis] - v));
+      if (dev <= best_dev) best = {axis, hi, v}, best_dev = dev, found = true;
+    }
+  if (!found) throw CapError("a cut loop leaves the face of the box it starts on (a cap across an edge of the box)");
+  return best;
+}
+
+// 2D coordinates in the face's plane, oriented so that counter-clockwise faces out of the box.
+glm::dvec2 planar(const glm::dvec3& p, const Face& f) {
+  const int u = (f.axis + 1) % 3, w = (f.axis + 2) % 3;
+  return f.hi ? glm::dvec2(p[u], p[w]) : glm::dvec2(p[w], p[u]);
+}
+
+double signed_area(const std::vector<glm::dvec2>& q) {
+  double a = 0;
+  for (std::size_t i = 0; i < q.size(); ++i) a += q[i].x * q[(i + 1) % q.size()].y - q[(i + 1) % q.size()].x * q[i].y;
+  return 0.5 * a;
+}
+
+bool inside_polygon(const std::vector<glm::dvec2>& poly, glm::dvec2 p) {
+  bool in = false;
+  for (std::size_t i = 0, j = poly.size() - 1; i < poly.size(); j = i++)
+    if ((poly[i].y > p.y) != (poly[j].y > p.y) &&
+        p.x < (poly[j].x - poly[i].x) * (p.y - poly[i].y) / (poly[j].y - poly[i].y) + poly[i].x)
+      in = !in;
+  return in;
+}
+
+// Ear clipping of a counter-clockwise simple polygon; triangles as indices into q.
+std::vector<std::array<std::uint32_t, 3>> ear_clip(const std::vector<glm::dvec2>& q) {
+  const std::size_t n = q.size();
+  std::vector<std::uint32_t> prev(n), next(n);
+  for (std::size_t i = 0; i < n; ++i) prev[i] = std::uint32_t((i + n - 1) % n), next[i] = std::uint32_t((i + 1) % n);
+  auto is_ear = [&](std::uint32_t b) {
+    const std::uint32_t a = prev[b], c = next[b];
+    if (cross2(q[a], q[b], q[c]) <= 0) return false;
+    for (std::uint32_t o = next[c]; o != a; o = next[o]) {
+      if (cross2(q[prev[o]], q[o], q[next[o]]) > 0) continue;  // only reflex corners can lie inside
+      if (cross2(q[a], q[b], q[o]) >= 0 && cross2(q[b], q[c], q[o]) >= 0 && cross2(q[c], q[a], q[o]) >= 0) return false;
+    }
+    return true;
+  };
+  std::vector<std::array<std::uint32_t, 3>> tris;
+  std::uint32_t v = 0;
+  for (std::size_t left = n, misses = 0; left > 3;) {
+    if (is_ear(v)) {
+      tris.push_back({prev[v], v, next[v]});
+      next[prev[v]] = next[v];
+      prev[next[v]] = prev[v];
+      v = next[v];
+      --left;
+      misses = 0;
+    } else {
+      v = next[v];
+      if (++misses > left) throw CapError("a cut loop is not a simple polygon in its face");
+    }
+  }
+  tris.push_back({prev[v], v, next[v]});
+  return tris;
+}
+
+// Lawson flips to the constrained Delaunay triangulation: polygon edges stay.
+std::size_t delaunay_flips(const std::vector<glm::dvec2>& q, std::vector<std::array<std::uint32_t, 3>>& t) {
+  auto key = [](std::uint32_t a, std::uint32_t b) { return (std::uint64_t(std::min(a, b)) << 32) | std::max(a, b); };
+  auto angle = [&](std::uint32_t o, std::uint32_t a, std::uint32_t b) {
+    const glm::dvec2 u = q[a] - q[o], v = q[b] - q[o];
+    return std::abs(std::atan2(u.x * v.y - u.y * v.x, u.x * v.x + u.y * v.y));
+  };
+  std::size_t flips = 0;
+  for (bool changed = true; changed && flips < 50 * t.size();) {
+    changed = false;
+    std::map<std::uint64_t, std::vector<std::size_t>> owner;
+    for (std::size_t i = 0; i < t.size(); ++i)
+      for (int k = 0; k < 3; ++k) owner[key(t[i][k], t[i][(k + 1) % 3])].push_back(i);
+    std::vector<std::uint8_t> touched(t.size(), 0);
+    for (const auto& [edge, tris] : owner) {
+      if (tris.size() != 2 || touched[tris[0]] || touched[tris[1]]) continue;
+      auto& t1 = t[tris[0]];
+      auto& t2 = t[tris[1]];
+      int k1 = 0;
+      while (key(t1[k1], t1[(k1 + 1) % 3]) != edge) ++k1;
+      const std::uint32_t a = t1[k1], b = t1[(k1 + 1) % 3], r = t1[(k1 + 2) % 3];
+      std::uint32_t s = t2[0] + t2[1] + t2[2] - a - b;
+      if (angle(r, b, a) + angle(s, a, b) <= 3.14159265358979 + 1e-12) continue;
+      if (cross2(q[r], q[s], q[b]) <= 0 || cross2(q[s], q[r], q[a]) <= 0) continue;  // the quad is not convex
+      t1 = {r, a, s};
+      t2 = {s, b, r};
+      touched[tris[0]] = touched[tris[1]] = 1;
+      changed = true;
+      ++flips;
+    }
+  }
+  return flips;
+}
+
+}  // namespace
+
+void cap_box_openings(TriangleMesh& mesh, const Aabb& box, double tol, CapStats* stats) {
+  CapStats st;
+  const auto loops = boundary_loops(mesh);
+  struct Ring {
+    Face face;
+    std::vector<std::uint32_t> vertices;  // the loop reversed: the cap's boundary
+    std::vector<glm::dvec2> q;
+  };
+  std::vector<Ring> rings;
+  for (const auto& loop : loops) {
+    Ring r;
+    r.face = face_of(mesh, loop, box, tol);
+    r.vertices.assign(loop.rbegin(), loop.rend());
+    for (std::uint32_t v : r.vertices) {
+      mesh.positions[v][r.face.axis] = r.face.value;
+      r.q.push_back(planar(mesh.positions[v], r.face));
+    }
+    if (signed_area(r.q) <= 0) throw CapError("a cut loop bounds a hole in its cap (a cap with a hole)");
+    rings.push_back(std::move(r));
+  }
+  for (std::size_t i = 0; i < rings.size(); ++i)
+    for (std::size_t j = 0; j < rings.size(); ++j)
+      if (i != j && rings[i].face.axis == rings[j].face.axis && rings[i].face.hi == rings[j].face.hi &&
+          inside_polygon(rings[j].q, rings[i].q[0]))
+        throw CapError("cut loops nest in one face (a cap with a hole)");
+  for (Ring& r : rings) {
+    auto tris = ear_clip(r.q);
+    st.flips += delaunay_flips(r.q, tris);
+    for (const auto& t : tris) mesh.triangles.push_back({r.vertices[t[0]], r.vertices[t[1]], r.vertices[t[2]]});
+    st.triangles += tris.size();
+    ++st.loops;
+  }
+  if (stats) *stats = st;
+}
+
+}  // namespace ht

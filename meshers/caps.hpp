@@ -1,0 +1,30 @@
+// Planar caps: closing the openings that a box leaves in a mesh it cuts (the crop's local
+// strategy, the paper's wings cut out of the Victory). Every boundary loop of the cut mesh lies
+// on one face of the box; each is closed by a triangulation of the polygon it bounds in that
+// plane: ear clipping (best-shaped ear first), then Lawson edge flips to the constrained
+// Delaunay triangulation of the polygon. The caps use the loops' own vertices, so the seam is
+// exact and the crease along it stays sharp; loop vertices are set onto their plane exactly.
+#pragma once
+
+#include "meshers/triangle_mesh.hpp"
+#include "runtime/aabb.hpp"
+
+#include <stdexcept>
+
+namespace ht {
+
+struct CapError : std::runtime_error {
+  using std::runtime_error::runtime_error;
+};
+
+struct CapStats {
+  std::size_t loops = 0, triangles = 0, flips = 0;
+};
+
+/// Closes `mesh` (an oriented mesh whose boundary loops lie on the faces of `box`, within
+/// `tolerance`) with planar caps facing out of the box. Throws CapError when a loop leaves its
+/// face (a cap across an edge of the box), when a face's loops nest (a cap with a hole), or when
+/// a loop is not a simple polygon.
+void cap_box_openings(TriangleMesh& mesh, const Aabb& box, double tolerance, CapStats* stats = nullptr);
+
+}  // namespace ht
