@@ -1,5 +1,7 @@
 #include "meshers/bridge.hpp"
 
+#include "meshers/edges.hpp"
+
 #include <glm/geometric.hpp>
 #include <tbb/parallel_for.h>
 
@@ -14,21 +16,17 @@ namespace {
 
 constexpr std::uint32_t kNo = ~0u;
 
-// Directed boundary edges: from -> to for every edge used by one triangle.
-std::vector<std::uint32_t> boundary_next(const TriangleMesh& m) {
-  std::vector<std::array<std::uint32_t, 3>> e;  // lo, hi, from
-  e.reserve(3 * m.triangles.size());
-  for (const glm::uvec3& t : m.triangles)
-    for (int k = 0; k < 3; ++k) e.push_back({std::min(t[k], t[(k + 1) % 3]), std::max(t[k], t[(k + 1) % 3]), t[k]});
-  std::sort(e.begin(), e.end());
+// Directed boundary edges: from -> to for every edge used by one triangle. A vertex with two
+// outgoing boundary edges (where the boundary touches itself) goes to `pinched` if given, else
+// throws.
+std::vector<std::uint32_t> boundary_next(const TriangleMesh& m, std::vector<std::uint32_t>* pinched = nullptr) {
   std::vector<std::uint32_t> next(m.positions.size(), kNo);
-  for (std::size_t i = 0; i < e.size(); ++i) {
-    const bool alone = (i == 0 || e[i - 1][0] != e[i][0] || e[i - 1][1] != e[i][1]) &&
-                       (i + 1 == e.size() || e[i + 1][0] != e[i][0] || e[i + 1][1] != e[i][1]);
-    if (!alone) continue;
-    const std::uint32_t from = e[i][2], to = from == e[i][0] ? e[i][1] : e[i][0];
-    if (next[from] != kNo) throw BridgeError("a boundary touches itself at a vertex");
-    next[from] = to;
+  for (const BoundaryEdge& e : boundary_edges(m)) {
+    if (next[e.from] != kNo) {
+      if (!pinched) throw BridgeError("a boundary touches itself at a vertex");
+      pinched->push_back(e.from);
+    }
+    next[e.from] = e.to;
   }
   return next;
 }
@@ -89,9 +87,9 @@ std::vector<double> arc_fractions(const std::vector<glm::dvec3>& pos, std::size_
 }
 
 // The strip between loop a (walked forward) and loop b (walked backward from b[start]). Each
-// step advances the loop that lags behind in arc length (so loops sampled differently stay in
-// step), unless that triangle would turn against the surface beside it (`side`, the loops' own
-// vertex normals) and the other would not.
+// step takes the shorter of the two diagonals, unless one loop lags behind the other by more
+// than kLag of its arc length, and never a triangle that would turn against the surface beside
+// it (`side`, the loops' own vertex normals) when the other would not.
 std::vector<glm::uvec3> zip(const std::vector<glm::dvec3>& pos, const std::vector<glm::dvec3>& side,
                             const std::vector<std::uint32_t>& a, const std::vector<std::uint32_t>& b,
                             std::size_t start, double max_width, double& widest) {
@@ -99,6 +97,7 @@ std::vector<glm::uvec3> zip(const std::vector<glm::dvec3>& pos, const std::vecto
   auto A = [&](std::size_t i) { return a[i % m]; };
   auto B = [&](std::size_t j) { return b[(start + n - j % n) % n]; };
   const std::vector<double> sa = arc_fractions(pos, m, A), sb = arc_fractions(pos, n, B);
+  constexpr double kLag = 0.04;  // of the loops' lengths
   std::vector<glm::uvec3> out;
   out.reserve(m + n);
   std::size_t i = 0, j = 0;
@@ -106,7 +105,12 @@ std::vector<glm::uvec3> zip(const std::vector<glm::dvec3>& pos, const std::vecto
     const glm::dvec3 up = side[A(i)] + side[B(j)];
     const bool a_ok = i < m && glm::dot(normal(pos, A(i + 1), A(i), B(j)), up) > 0;
     const bool b_ok = j < n && glm::dot(normal(pos, B(j), B(j + 1), A(i)), up) > 0;
-    bool advance_a = j == n || (i < m && sa[i + 1] <= sb[j + 1]);
+    // The shorter diagonal follows the loops' local shape; the arc fractions keep the walk from
+    // running away along one loop where the shapes differ.
+    bool advance_a;
+    if (j == n || (i < m && sb[j] - sa[i] > kLag)) advance_a = true;
+    else if (i == m || sa[i] - sb[j] > kLag) advance_a = false;
+    else advance_a = glm::length(pos[A(i + 1)] - pos[B(j)]) <= glm::length(pos[B(j + 1)] - pos[A(i)]);
     if (advance_a && !a_ok && b_ok) advance_a = false;
     if (!advance_a && !b_ok && a_ok) advance_a = true;
     const double d = advance_a ? glm::length(pos[A(i + 1)] - pos[B(j)]) : glm::length(pos[B(j + 1)] - pos[A(i)]);
@@ -153,31 +157,36 @@ std::vector<std::vector<std::uint32_t>> boundary_loops(const TriangleMesh& mesh)
   return loops;
 }
 
-TriangleMesh pull_back_boundary(const TriangleMesh& mesh) {
-  const std::vector<std::uint32_t> next = boundary_next(mesh);
-  std::vector<std::uint32_t> index(mesh.positions.size(), kNo);
+// The triangles of `m` but those with a corner marked in `drop`, unused vertices removed, the
+// others in their original order.
+TriangleMesh without(const TriangleMesh& m, const std::vector<std::uint8_t>& drop) {
+  std::vector<std::uint8_t> used(m.positions.size(), 0);
+  for (const glm::uvec3& t : m.triangles)
+    if (!drop[t[0]] && !drop[t[1]] && !drop[t[2]]) used[t[0]] = used[t[1]] = used[t[2]] = 1;
+  std::vector<std::uint32_t> index(m.positions.size(), kNo);
   TriangleMesh out;
-  for (const glm::uvec3& t : mesh.triangles) {
-    if (next[t[0]] != kNo || next[t[1]] != kNo || next[t[2]] != kNo) continue;
-    glm::uvec3 r;
-    for (int k = 0; k < 3; ++k) {
-      if (index[t[k]] == kNo) index[t[k]] = std::uint32_t(out.positions.size()), out.positions.push_back(mesh.positions[t[k]]);
-      r[k] = index[t[k]];
-    }
-    out.triangles.push_back(r);
+  for (std::uint32_t v = 0; v < m.positions.size(); ++v)
+    if (used[v]) index[v] = std::uint32_t(out.positions.size()), out.positions.push_back(m.positions[v]);
+  for (const glm::uvec3& t : m.triangles)
+    if (!drop[t[0]] && !drop[t[1]] && !drop[t[2]]) out.triangles.push_back({index[t[0]], index[t[1]], index[t[2]]});
+  return out;
+}
+
+TriangleMesh pull_back_boundary(const TriangleMesh& mesh) {
+  std::vector<std::uint8_t> drop(mesh.positions.size(), 0);
+  const std::vector<std::uint32_t> next = boundary_next(mesh);
+  for (std::size_t v = 0; v < next.size(); ++v) drop[v] = next[v] != kNo;
+  TriangleMesh out = without(mesh, drop);
+  // Pulling back can leave vertices where the new boundary touches itself: drop their fans too.
+  for (int round = 0; round < 8; ++round) {
+    std::vector<std::uint32_t> pinched;
+    boundary_next(out, &pinched);
+    if (pinched.empty()) break;
+    std::vector<std::uint8_t> pinch(out.positions.size(), 0);
+    for (std::uint32_t v : pinched) pinch[v] = 1;
+    out = without(out, pinch);
   }
-  // Keep the vertices' original order: renumber by source index.
-  std::vector<std::uint32_t> order;
-  for (std::uint32_t v = 0; v < index.size(); ++v)
-    if (index[v] != kNo) order.push_back(v);
-  std::vector<std::uint32_t> rank(out.positions.size());
-  for (std::uint32_t k = 0; k < order.size(); ++k) rank[index[order[k]]] = k;
-  TriangleMesh sorted;
-  sorted.positions.resize(out.positions.size());
-  for (std::uint32_t k = 0; k < order.size(); ++k) sorted.positions[k] = mesh.positions[order[k]];
-  sorted.triangles.reserve(out.triangles.size());
-  for (const glm::uvec3& t : out.triangles) sorted.triangles.push_back({rank[t[0]], rank[t[1]], rank[t[2]]});
-  return sorted;
+  return out;
 }
 
 TriangleMesh bridge(std::span<const TriangleMesh* const> operands, const TriangleMesh& patch, double max_width,

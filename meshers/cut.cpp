@@ -1,5 +1,7 @@
 #include "meshers/cut.hpp"
 
+#include "meshers/edges.hpp"
+
 #include <glm/geometric.hpp>
 
 #include <algorithm>
@@ -136,17 +138,10 @@ double min_angle_cos(const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3&
 
 // The vertices of `m` with more than one outgoing boundary edge (where the kept part pinches).
 std::vector<std::uint32_t> pinched(const TriangleMesh& m) {
-  std::vector<std::array<std::uint32_t, 3>> e;  // lo, hi, from
-  for (const glm::uvec3& t : m.triangles)
-    for (int k = 0; k < 3; ++k) e.push_back({std::min(t[k], t[(k + 1) % 3]), std::max(t[k], t[(k + 1) % 3]), t[k]});
-  std::sort(e.begin(), e.end());
   std::vector<std::uint8_t> out(m.positions.size(), 0);
   std::vector<std::uint32_t> bad;
-  for (std::size_t i = 0; i < e.size(); ++i) {
-    const bool alone = (i == 0 || e[i - 1][0] != e[i][0] || e[i - 1][1] != e[i][1]) &&
-                       (i + 1 == e.size() || e[i + 1][0] != e[i][0] || e[i + 1][1] != e[i][1]);
-    if (alone && ++out[e[i][2]] == 2) bad.push_back(e[i][2]);
-  }
+  for (const BoundaryEdge& e : boundary_edges(m))
+    if (++out[e.from] == 2) bad.push_back(e.from);
   return bad;
 }
 

@@ -204,7 +204,8 @@ TriangleMesh trim_boolean(const LocalInput& in, LocalStats* stats) {
   st.kept_triangles = count_triangles(pieces);
   std::vector<std::uint8_t> seam;
   TriangleMesh out = join(pieces, in, st, false, &seam);
-  untangle(out, seam, *node_tape(in), T);  // the seam is the crease: it stays
+  // The seam is the crease: it stays. Only where the operands meet can the result intersect.
+  st.self_intersections = untangle(out, seam, *node_tape(in), T, meet.expanded(2.0 * in.precision));
   if (stats) *stats = st;
   return out;
 }
@@ -257,8 +258,18 @@ TriangleMesh trim_blend(const LocalInput& in, LocalStats* stats) {
   if (meets.empty()) {
     out = join(pieces, in, st, true);  // nothing meets: the operands' meshes as they are
   } else {
-    const TriangleMesh p = patch(in, clip, [meets](const Aabb& brick) {
-      return std::any_of(meets.begin(), meets.end(), [&](const Aabb& m) { return overlaps(m, brick); });
+    // Only bricks where two operands may both reach eps (interval analysis), two cells wider.
+    const Graph* graph = in.graph.get();
+    const double margin = 2.0 * in.precision, T = in.threshold;
+    const TriangleMesh p = patch(in, clip, [meets, graph, c, eps, margin, T](const Aabb& brick) {
+      if (std::none_of(meets.begin(), meets.end(), [&](const Aabb& m) { return overlaps(m, brick); })) return false;
+      const Aabb wide = brick.expanded(margin);
+      int acting = 0;
+      for (NodeId child : c) {
+        const Interval iv = field_interval(*graph, child, T, wide, true);
+        acting += iv.hi >= eps || iv.lo <= -eps;
+      }
+      return acting >= 2;
     }, st, false);  // a blend is smooth where operands meet
     const auto field = node_tape(in);
     TriangleMesh band_side = pull_back_boundary(cut_mesh(p, others(c.size(), eps), cut_options(in)));
@@ -268,13 +279,13 @@ TriangleMesh trim_blend(const LocalInput& in, LocalStats* stats) {
     for (const TriangleMesh& piece : pieces)
       if (!piece.triangles.empty()) ops.push_back(&piece);
     std::uint32_t first_patch = 0;
-    out = bridge(ops, band_side, 3.0 * in.precision, &st.bridge, &first_patch);
+    out = bridge(ops, band_side, 8.0 * in.precision, &st.bridge, &first_patch);
     relax_band(out, first_patch, *field, in.threshold);
     // The operands' trimmed edges stay; everything else may move to undo a fold.
     std::vector<std::uint8_t> fixed(out.positions.size(), 0);
     for (const auto& loop : boundary_loops(join_operands(ops)))
       for (std::uint32_t v : loop) fixed[v] = 1;
-    untangle(out, fixed, *field, in.threshold);
+    st.self_intersections = untangle(out, fixed, *field, in.threshold, clip);
   }
   if (stats) *stats = st;
   return out;
@@ -302,6 +313,9 @@ TriangleMesh trim_crop(const LocalInput& in, LocalStats* stats) {
     throw LocalFailure(e.what());
   }
   st.patch_triangles = caps.triangles;
+  // Only the cut and its caps are new: look for intersections next to the box's faces.
+  const Aabb outer = Aabb{lo, hi}.expanded(2.0 * in.precision);
+  st.self_intersections = intersections_in(out, outer).size();
   if (stats) *stats = st;
   return out;
 }

@@ -50,7 +50,10 @@ struct LocalStats {
   std::size_t patch_triangles = 0;    ///< new surface from the polygonizer, after its cut
   bool patched = false;               ///< the polygonizer ran on part of the node
   PolygonizeStats patch;
-  StitchStats stitch;                 ///< Booleans and crops: the exact seams
+  /// Self-intersecting triangle pairs left where the strategy changed the mesh (the plan
+  /// rejects a result with any).
+  std::size_t self_intersections = 0;
+  StitchStats stitch;                 ///< Booleans: the exact seams
   BridgeStats bridge;                 ///< blends: the bands between operands and patch
 };
 

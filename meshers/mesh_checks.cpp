@@ -20,7 +20,7 @@ constexpr std::uint32_t kNoIndex = ~0u;
 
 }  // namespace
 
-MeshChecks check_mesh(const TriangleMesh& mesh) {
+MeshChecks check_mesh(const TriangleMesh& mesh, bool self_intersections) {
   MeshChecks c;
   const auto& P = mesh.positions;
   const auto& T = mesh.triangles;
@@ -149,7 +149,7 @@ MeshChecks check_mesh(const TriangleMesh& mesh) {
     c.min_angle = std::min(c.min_angle, amin);
     ++c.min_angle_histogram[std::min<std::size_t>(5, static_cast<std::size_t>(amin / 10.0))];
   }
-  if (!T.empty()) c.self_intersecting_pairs = find_self_intersections(mesh, 0).pairs;
+  if (!T.empty() && self_intersections) c.self_intersecting_pairs = find_self_intersections(mesh, 0).pairs;
   return c;
 }
 

@@ -52,7 +52,7 @@ struct MeshChecks {
 /// an exact test per pair of triangles whose boxes overlap, in parallel (see
 /// find_self_intersections()). No allocation beyond a few arrays of the mesh's size and the
 /// candidate pairs.
-MeshChecks check_mesh(const TriangleMesh& mesh);
+MeshChecks check_mesh(const TriangleMesh& mesh, bool self_intersections = true);
 
 /// Fills the surface-error fields of `checks` by evaluating f and grad f with the tape at T.
 void measure_surface_error(const TriangleMesh& mesh, const TapeEvaluator& tape, double threshold, MeshChecks& checks);

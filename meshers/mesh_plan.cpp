@@ -148,9 +148,11 @@ double since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-// Why a local result cannot be returned, or empty when it can.
-std::string local_defect(const TriangleMesh& m) {
-  const MeshChecks c = check_mesh(m);
+// Why a local result cannot be returned, or empty when it can. The strategy has looked for
+// self-intersections where it changed the mesh (LocalStats::self_intersections).
+std::string local_defect(const TriangleMesh& m, const LocalStats& local) {
+  MeshChecks c = check_mesh(m, false);
+  c.self_intersecting_pairs = local.self_intersections;
   std::string why;
   auto add = [&](std::size_t n, const char* what) {
     if (n) why += (why.empty() ? "" : ", ") + std::to_string(n) + " " + what;
@@ -326,7 +328,7 @@ std::shared_ptr<const TriangleMesh> Runner::trim(const Job& job, const std::shar
                                                                 : trim_crop(in, &r.local);
     r.polygonized = r.local.patched;
     r.polygonize = r.local.patch;
-    cause = local_defect(m);
+    cause = local_defect(m, r.local);
     if (cause.empty()) return std::make_shared<const TriangleMesh>(std::move(m));
     cause = "the result had " + cause;
   } catch (const MeshCancelled&) {

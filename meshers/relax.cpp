@@ -12,29 +12,30 @@
 namespace ht {
 namespace {
 
-// Vertex neighbours in compressed rows (each undirected edge seen from both ends, duplicates
-// removed).
+// The neighbours of the chosen vertices only (one scan of the triangles, no sort of the
+// whole mesh): rows in the order of `chosen`.
 struct Neighbours {
   std::vector<std::uint32_t> begin, list;
 };
 
-Neighbours neighbours(const TriangleMesh& m) {
-  std::vector<std::uint64_t> pairs;
-  pairs.reserve(6 * m.triangles.size());
+Neighbours neighbours_of(const TriangleMesh& m, const std::vector<std::uint32_t>& chosen) {
+  std::vector<std::uint32_t> row(m.positions.size(), ~0u);
+  for (std::uint32_t i = 0; i < chosen.size(); ++i) row[chosen[i]] = i;
+  std::vector<std::vector<std::uint32_t>> rows(chosen.size());
   for (const glm::uvec3& t : m.triangles)
-    for (int k = 0; k < 3; ++k) {
-      const std::uint64_t a = t[k], b = t[(k + 1) % 3];
-      pairs.push_back(a << 32 | b);
-      pairs.push_back(b << 32 | a);
-    }
-  std::sort(pairs.begin(), pairs.end());
-  pairs.erase(std::unique(pairs.begin(), pairs.end()), pairs.end());
+    for (int k = 0; k < 3; ++k)
+      if (row[t[k]] != ~0u) {
+        rows[row[t[k]]].push_back(t[(k + 1) % 3]);
+        rows[row[t[k]]].push_back(t[(k + 2) % 3]);
+      }
   Neighbours n;
-  n.begin.assign(m.positions.size() + 1, 0);
-  for (std::uint64_t p : pairs) ++n.begin[(p >> 32) + 1];
-  for (std::size_t v = 0; v < m.positions.size(); ++v) n.begin[v + 1] += n.begin[v];
-  n.list.reserve(pairs.size());
-  for (std::uint64_t p : pairs) n.list.push_back(std::uint32_t(p));
+  n.begin.push_back(0);
+  for (auto& r : rows) {
+    std::sort(r.begin(), r.end());
+    r.erase(std::unique(r.begin(), r.end()), r.end());
+    n.list.insert(n.list.end(), r.begin(), r.end());
+    n.begin.push_back(std::uint32_t(n.list.size()));
+  }
   return n;
 }
 
@@ -74,15 +75,31 @@ void relax_boundary(TriangleMesh& mesh, const TapeEvaluator& field, double T, in
   }
 }
 
+std::vector<std::array<std::uint32_t, 2>> intersections_in(const TriangleMesh& mesh, const Aabb& region) {
+  TriangleMesh near;
+  std::vector<std::uint32_t> source;
+  near.positions = mesh.positions;  // unused vertices cost nothing to the search
+  for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t) {
+    Aabb box;
+    for (int k = 0; k < 3; ++k) box.grow(mesh.positions[mesh.triangles[t][k]]);
+    if (intersect(box, region).empty()) continue;
+    near.triangles.push_back(mesh.triangles[t]);
+    source.push_back(t);
+  }
+  std::vector<std::array<std::uint32_t, 2>> pairs = find_self_intersections(near, std::size_t(-1)).examples;
+  for (auto& p : pairs) p = {source[p[0]], source[p[1]]};
+  return pairs;
+}
+
 std::size_t untangle(TriangleMesh& mesh, std::span<const std::uint8_t> fixed, const TapeEvaluator& field, double T,
-                     int rounds) {
+                     const Aabb& region, int rounds) {
   std::vector<std::uint8_t> free(mesh.positions.size());
   for (std::size_t v = 0; v < free.size(); ++v) free[v] = !fixed[v];
   for (int r = 0;; ++r) {
-    const SelfIntersections si = find_self_intersections(mesh, std::size_t(-1));
-    if (si.pairs == 0 || r == rounds) return si.pairs;
+    const auto pairs = intersections_in(mesh, region);
+    if (pairs.empty() || r == rounds) return pairs.size();
     std::vector<std::uint8_t> hit(mesh.positions.size(), 0);
-    for (const auto& pair : si.examples)
+    for (const auto& pair : pairs)
       for (std::uint32_t t : pair)
         for (int k = 0; k < 3; ++k) hit[mesh.triangles[t][k]] = 1;
     std::vector<std::uint8_t> movable = rings_around(mesh, hit, free, 1);
@@ -93,22 +110,15 @@ std::size_t untangle(TriangleMesh& mesh, std::span<const std::uint8_t> fixed, co
 
 std::vector<std::uint8_t> rings_around(const TriangleMesh& mesh, std::span<const std::uint8_t> seeds,
                                        std::span<const std::uint8_t> allowed, int rings) {
-  const Neighbours n = neighbours(mesh);
-  std::vector<std::uint8_t> out(mesh.positions.size(), 0);
-  std::vector<std::uint32_t> front, next;
-  for (std::uint32_t v = 0; v < mesh.positions.size(); ++v)
-    if (seeds[v]) front.push_back(v);
+  std::vector<std::uint8_t> reached(seeds.begin(), seeds.end()), out(mesh.positions.size(), 0);
   for (int r = 0; r < rings; ++r) {
-    next.clear();
-    for (std::uint32_t v : front)
-      for (std::uint32_t i = n.begin[v]; i < n.begin[v + 1]; ++i) {
-        const std::uint32_t w = n.list[i];
-        if (seeds[w] || out[w] || !allowed[w]) continue;
-        out[w] = 1;
-        next.push_back(w);
-      }
-    std::sort(next.begin(), next.end());
-    front.swap(next);
+    std::vector<std::uint8_t> next = reached;
+    for (const glm::uvec3& t : mesh.triangles) {
+      if (!reached[t[0]] && !reached[t[1]] && !reached[t[2]]) continue;
+      for (int k = 0; k < 3; ++k)
+        if (!reached[t[k]] && allowed[t[k]] && !seeds[t[k]]) next[t[k]] = 1, out[t[k]] = 1;
+    }
+    reached.swap(next);
   }
   return out;
 }
@@ -119,17 +129,16 @@ void relax_vertices(TriangleMesh& mesh, std::span<const std::uint8_t> movable, c
   for (std::uint32_t v = 0; v < mesh.positions.size(); ++v)
     if (movable[v]) moving.push_back(v);
   if (moving.empty()) return;
-  const Neighbours n = neighbours(mesh);
+  const Neighbours n = neighbours_of(mesh, moving);
   std::vector<glm::dvec3> at(moving.size()), grad(moving.size());
   std::vector<double> value(moving.size());
   for (int it = 0; it < o.iterations; ++it) {
     for (std::size_t i = 0; i < moving.size(); ++i) at[i] = mesh.positions[moving[i]];
     field.gradient(at, {}, grad);
     for (std::size_t i = 0; i < moving.size(); ++i) {
-      const std::uint32_t v = moving[i];
       glm::dvec3 c(0.0);
-      for (std::uint32_t k = n.begin[v]; k < n.begin[v + 1]; ++k) c += mesh.positions[n.list[k]];
-      c /= double(n.begin[v + 1] - n.begin[v]);
+      for (std::uint32_t k = n.begin[i]; k < n.begin[i + 1]; ++k) c += mesh.positions[n.list[k]];
+      c /= double(std::max<std::uint32_t>(1, n.begin[i + 1] - n.begin[i]));
       const double len = glm::length(grad[i]);
       glm::dvec3 d = c - at[i];
       if (len > 0 && std::isfinite(len)) d -= glm::dot(d, grad[i] / len) * (grad[i] / len);

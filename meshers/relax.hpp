@@ -8,6 +8,9 @@
 #pragma once
 
 #include "meshers/triangle_mesh.hpp"
+#include "runtime/aabb.hpp"
+
+#include <array>
 
 #include <cstdint>
 #include <span>
@@ -31,11 +34,15 @@ void relax_vertices(TriangleMesh& mesh, std::span<const std::uint8_t> movable, c
 /// tangential relaxation, so the loop's own triangles do not fold.
 void relax_boundary(TriangleMesh& mesh, const TapeEvaluator& field, double threshold, int iterations = 3);
 
-/// Untangles a mesh locally: while some triangles intersect (meshers/self_intersections.hpp),
-/// their vertices and one ring around them, except the `fixed` ones, are relaxed as above. At
-/// most `rounds` rounds; returns the intersecting pairs left.
+/// The intersecting triangle pairs among the triangles whose boxes meet `region` (where a local
+/// strategy changed the mesh: the rest is the operands' own), as pairs of triangle indices.
+std::vector<std::array<std::uint32_t, 2>> intersections_in(const TriangleMesh& mesh, const Aabb& region);
+
+/// Untangles a mesh locally: while some triangles in `region` intersect, their vertices and one
+/// ring around them, except the `fixed` ones, are relaxed as above. At most `rounds` rounds;
+/// returns the intersecting pairs left in the region.
 std::size_t untangle(TriangleMesh& mesh, std::span<const std::uint8_t> fixed, const TapeEvaluator& field, double threshold,
-                     int rounds = 3);
+                     const Aabb& region, int rounds = 3);
 
 /// The vertices within `rings` edges of a seed, reached through vertices that `allowed` accepts;
 /// the seeds themselves are not included.

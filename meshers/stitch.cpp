@@ -1,5 +1,6 @@
 #include "meshers/stitch.hpp"
 
+#include "meshers/edges.hpp"
 #include "meshers/union_find.hpp"
 
 #include <glm/geometric.hpp>
@@ -47,40 +48,27 @@ struct Boundary {
 };
 
 Boundary find_boundary(const Soup& s) {
-  struct Half {
-    std::uint64_t key;
-    std::uint32_t slot;
-  };
-  std::vector<Half> he;
-  he.reserve(3 * s.triangles.size());
-  for (std::uint32_t t = 0; t < s.triangles.size(); ++t)
-    for (int k = 0; k < 3; ++k) {
-      const std::uint32_t a = s.triangles[t][k], b = s.triangles[t][(k + 1) % 3];
-      he.push_back({(std::uint64_t(std::min(a, b)) << 32) | std::max(a, b), 3 * t + std::uint32_t(k)});
-    }
-  std::sort(he.begin(), he.end(), [](const Half& x, const Half& y) { return x.key != y.key ? x.key < y.key : x.slot < y.slot; });
+  TriangleMesh view;  // boundary_edges() reads a mesh; the soup's arrays are copied once
+  view.positions = s.positions;
+  view.triangles = s.triangles;
   Boundary b;
   b.edge_of_slot.assign(3 * s.triangles.size(), kNo);
   b.out_edge.assign(s.positions.size(), kNo);
   b.in_edge.assign(s.positions.size(), kNo);
   b.scale.assign(s.positions.size(), std::numeric_limits<double>::infinity());
-  for (std::size_t i = 0; i < he.size(); ++i) {
-    const bool alone = (i == 0 || he[i - 1].key != he[i].key) && (i + 1 == he.size() || he[i + 1].key != he[i].key);
-    if (!alone) continue;
-    const std::uint32_t slot = he[i].slot, t = slot / 3, k = slot % 3;
-    const std::uint32_t from = s.triangles[t][k], to = s.triangles[t][(k + 1) % 3];
+  for (const BoundaryEdge& be : boundary_edges(view)) {
     const std::uint32_t e = std::uint32_t(b.from.size());
-    if (b.out_edge[from] != kNo || b.in_edge[to] != kNo)
+    if (b.out_edge[be.from] != kNo || b.in_edge[be.to] != kNo)
       throw StitchError("a piece's boundary touches itself at a vertex (a pinched boundary)");
-    b.from.push_back(from);
-    b.to.push_back(to);
-    b.slot.push_back(slot);
-    b.edge_of_slot[slot] = e;
-    b.out_edge[from] = e;
-    b.in_edge[to] = e;
-    const double len = glm::length(s.positions[to] - s.positions[from]);
-    b.scale[from] = std::min(b.scale[from], len);
-    b.scale[to] = std::min(b.scale[to], len);
+    b.from.push_back(be.from);
+    b.to.push_back(be.to);
+    b.slot.push_back(be.slot);
+    b.edge_of_slot[be.slot] = e;
+    b.out_edge[be.from] = e;
+    b.in_edge[be.to] = e;
+    const double len = glm::length(s.positions[be.to] - s.positions[be.from]);
+    b.scale[be.from] = std::min(b.scale[be.from], len);
+    b.scale[be.to] = std::min(b.scale[be.to], len);
   }
   return b;
 }

@@ -1,0 +1,21 @@
+// The boundary of a triangle mesh in linear time: the edges that exactly one triangle uses,
+// found by bucketing every edge by its lower vertex (a counting sort) instead of sorting them
+// all. The local strategies call it on whole operand meshes, where a sort would dominate.
+#pragma once
+
+#include "meshers/triangle_mesh.hpp"
+
+#include <cstdint>
+#include <vector>
+
+namespace ht {
+
+struct BoundaryEdge {
+  std::uint32_t from, to;  ///< in the direction the triangle runs along it
+  std::uint32_t slot;      ///< 3 * triangle + the corner where the edge starts
+};
+
+/// Every edge used by exactly one triangle, ordered by its lower vertex, then by slot.
+std::vector<BoundaryEdge> boundary_edges(const TriangleMesh& mesh);
+
+}  // namespace ht
