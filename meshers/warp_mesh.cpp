@@ -15,6 +15,7 @@ namespace {
 
 constexpr int kMaxPasses = 10;
 constexpr int kNewtonSteps = 3;
+constexpr double kStretch = 1.01;  // an edge the warp lengthens by more than this is stretched
 
 std::uint64_t edge_key(std::uint32_t a, std::uint32_t b) {
   return (std::uint64_t(std::min(a, b)) << 32) | std::uint64_t(std::max(a, b));
@@ -57,7 +58,10 @@ TriangleMesh warp_mesh(const TriangleMesh& child, const std::function<glm::dvec3
     for (const auto& t : tris)
       for (int k = 0; k < 3; ++k) {
         const std::uint32_t a = t[k], b = t[(k + 1) % 3];
-        if (glm::dot(world[a] - world[b], world[a] - world[b]) > limit2 &&
+        // Long after warping, and longer than in the child: a rigid warp leaves the child's
+        // own edges as they were (the paper: it preserves the triangles' shapes).
+        const double warped2 = glm::dot(world[a] - world[b], world[a] - world[b]);
+        if (warped2 > limit2 && (region || warped2 > kStretch * kStretch * glm::dot(local[a] - local[b], local[a] - local[b])) &&
             (!region || region->contains(0.5 * (world[a] + world[b]))))
           long_edges.push_back(edge_key(a, b));
       }

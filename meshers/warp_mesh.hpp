@@ -24,7 +24,9 @@ struct WarpRemeshStats {
 
 /// Moves child_mesh (in the child's space) by `warp` and splits edges longer than max_edge after
 /// warping, projecting new vertices onto {f_child = T} with `child_field` (the child's tape).
-/// With `region`, only edges whose warped midpoint lies in that box are split.
+/// Only edges the warp lengthens are split (a rigid motion splits none). With `region`, every
+/// edge longer than max_edge whose warped midpoint lies in that box is split, stretched or not
+/// (the local strategies refine a coarse operand near a seam this way).
 TriangleMesh warp_mesh(const TriangleMesh& child_mesh, const std::function<glm::dvec3(const glm::dvec3&)>& warp,
                        const TapeEvaluator& child_field, double threshold, double max_edge,
                        WarpRemeshStats* stats = nullptr, const Aabb* region = nullptr);
