@@ -5,6 +5,8 @@
 
 #include <gtest/gtest.h>
 
+#include <map>
+
 #include <cstdlib>
 #include <fstream>
 #include <nlohmann/json.hpp>
@@ -213,6 +215,31 @@ TEST(Cli, MeshStrategiesAreLoggedPerNode) {
       EXPECT_EQ(j["nodes"][0]["strategy"], "global");
     }
   }
+  std::filesystem::remove_all(dir);
+}
+
+TEST(Cli, LocalStrategiesReportWhatTheyDidPerNode) {
+  const auto dir = test::temp_dir("cli-local");
+  const std::string s = write_scene(dir, "s.json", R"({"hybridtree": 1, "mesher": {"precision": 0.03}, "root":
+      {"type": "union", "name": "pair", "children": [
+        {"type": "blend", "name": "close", "children": [{"type": "point", "center": [0,0,0], "radius": 1},
+                                                         {"type": "point", "center": [0.1,0,0], "radius": 1}]},
+        {"type": "segment", "name": "bar", "a": [0.3,0,0], "b": [1.2,0,0], "radius": 0.4}]}})");
+  const auto r = test::run_cli("mesh " + s + " -o " + (dir / "m.ply").string() + " --stats-json " + (dir / "st.json").string());
+  ASSERT_EQ(r.code, 0) << r.err;
+  std::ifstream in(dir / "st.json");
+  const auto j = nlohmann::json::parse(in);
+  EXPECT_EQ(j["checks"]["watertight"], true);
+  EXPECT_EQ(j["checks"]["self_intersecting_pairs"], 0);
+  std::map<std::string, nlohmann::json> by_name;
+  for (const auto& n : j["nodes"]) by_name[n["node"].get<std::string>()] = n;
+  EXPECT_EQ(by_name["\"pair\""]["strategy"], "trim boolean");
+  EXPECT_EQ(by_name["\"close\""]["strategy"], "global");
+  EXPECT_EQ(by_name["\"close\""]["reason"], "high overlap");
+  EXPECT_GT(by_name["\"close\""]["rho"].get<double>(), 0.5);
+  EXPECT_GT(by_name["\"close\""]["bricks"]["active"].get<int>(), 0);  // the polygonizer's statistics survive
+  EXPECT_EQ(by_name["\"bar\""]["strategy"], "sweep");
+  EXPECT_GT(j["bricks"]["active"].get<int>(), 0);
   std::filesystem::remove_all(dir);
 }
 

@@ -12,6 +12,9 @@
 #include <glm/gtc/matrix_transform.hpp>
 #include <gtest/gtest.h>
 
+#include <algorithm>
+#include <atomic>
+
 using namespace ht;
 using glm::dvec3;
 
@@ -80,4 +83,73 @@ TEST(MeshPlan, HintsWinOverTheRequest) {
   EXPECT_EQ(r.nodes[0].strategy, JobStrategy::Global);
   EXPECT_EQ(r.nodes[0].reason, JobReason::Hint);
   EXPECT_EQ(r.nodes[1].strategy, JobStrategy::WarpedChild);
+}
+
+TEST(MeshPlan, ASharedSubtreeIsMeshedOnce) {
+  Builder b(kT);
+  const NodeId seg = b.segment({-0.5, 0, 0}, {0.5, 0, 0}, {0.4});
+  const NodeId moved = b.affine(seg, glm::translate(glm::dmat4(1.0), dvec3(0, 2, 0)));
+  const NodeId root = b.blend({seg, moved});  // seg is read twice: by the blend and by the affine
+  const Tree t = b.build(root);
+  const MeshResult r = mesh_tree(t, at(0.03));
+  std::size_t seg_jobs = 0;
+  for (const NodeReport& n : r.nodes) seg_jobs += n.node == seg;
+  EXPECT_EQ(seg_jobs, 1u);
+  EXPECT_EQ(r.nodes.size(), 3u);
+  const MeshChecks c = check_mesh(*r.mesh);
+  EXPECT_TRUE(c.watertight());
+  EXPECT_EQ(c.components, 2u);
+  // Reports come by node id.
+  for (std::size_t i = 1; i < r.nodes.size(); ++i) EXPECT_LT(r.nodes[i - 1].node, r.nodes[i].node);
+}
+
+TEST(MeshPlan, ProgressRisesToOneAndCancellingThrows) {
+  Builder b(kT);
+  std::vector<NodeId> parts;
+  for (int i = 0; i < 6; ++i) parts.push_back(b.point({1.5 * i, 0, 0}, {1.0}));
+  const Tree t = b.build(b.blend(parts));
+  MeshOptions o = at(0.02);
+  std::vector<double> seen;
+  o.progress = [&](double f) { seen.push_back(f); };
+  mesh_tree(t, o);
+  ASSERT_FALSE(seen.empty());
+  EXPECT_TRUE(std::is_sorted(seen.begin(), seen.end()));
+  EXPECT_DOUBLE_EQ(seen.back(), 1.0);
+  std::atomic<bool> cancel{true};
+  o.cancel = &cancel;
+  EXPECT_THROW(mesh_tree(t, o), MeshCancelled);
+  // A flag raised while the jobs run stops the rest.
+  cancel = false;
+  o.progress = [&](double f) {
+    if (f > 0.2) cancel = true;
+  };
+  EXPECT_THROW(mesh_tree(t, o), MeshCancelled);
+}
+
+TEST(MeshPlan, BlendsAboveTheOverlapThresholdPolygonizeTheirWholeSubtree) {
+  Builder b(kT);
+  const NodeId inner = b.blend({b.point({0, 0, 0}, {1.0}), b.point({0.2, 0, 0}, {1.0})});  // rho near 0.7
+  const NodeId far = b.point({3, 0, 0}, {1.0});
+  const NodeId root = b.blend({inner, far});  // disjoint: rho 0
+  const Tree t = b.build(root);
+  const MeshResult r = mesh_tree(t, at(0.03));
+  ASSERT_EQ(r.nodes.size(), 3u);  // inner (global), far (sweep), root (trim)
+  for (const NodeReport& n : r.nodes) {
+    if (n.node == inner) {
+      EXPECT_EQ(n.strategy, JobStrategy::Global);
+      EXPECT_EQ(n.reason, JobReason::HighOverlap);
+      EXPECT_GT(n.rho, 0.5);
+    }
+    if (n.node == root) {
+      EXPECT_EQ(n.strategy, JobStrategy::TrimBlend);
+      EXPECT_EQ(n.reason, JobReason::LowOverlap);
+      EXPECT_EQ(n.rho, 0.0);
+    }
+  }
+  // With a threshold above rho the inner blend is trimmed too, and the mesh is still closed.
+  MeshOptions o = at(0.03);
+  o.blend_overlap = 0.9;
+  const MeshResult local = mesh_tree(t, o);
+  EXPECT_EQ(local.nodes.size(), 5u);
+  EXPECT_TRUE(check_mesh(*local.mesh).watertight());
 }

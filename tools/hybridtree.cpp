@@ -22,6 +22,8 @@
 #include <unistd.h>
 
 #include <array>
+#include <atomic>
+#include <csignal>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -208,6 +210,11 @@ struct MeshArgs {
   int threads = 0;
 };
 
+// Ctrl-C asks the mesh plan to stop between jobs and bricks; it then throws MeshCancelled and
+// no file is written. (A lock-free atomic store is safe in a signal handler.)
+std::atomic<bool> interrupted{false};
+extern "C" void on_interrupt(int) { interrupted.store(true); }
+
 // A one-line progress bar on stderr, only when stderr is a terminal.
 std::function<void(double)> progress_bar() {
   if (!::isatty(STDERR_FILENO)) return {};
@@ -298,6 +305,8 @@ int cmd_mesh(const MeshArgs& a) {
   options.polygonize.sharp_features = a.sharp == "on";
   options.blend_overlap = tree.mesher_settings().blend_overlap;
   options.progress = progress_bar();
+  options.cancel = &interrupted;
+  std::signal(SIGINT, on_interrupt);
   std::string strategy_name = a.strategy;
   if (strategy_name.empty())
     strategy_name = tree.mesher_settings().strategy == ht::MesherHint::Global  ? "global"
@@ -310,6 +319,8 @@ int cmd_mesh(const MeshArgs& a) {
   ht::MeshResult result;
   try {
     result = ht::mesh_tree(tree, options);
+  } catch (const ht::MeshCancelled&) {
+    throw std::runtime_error(a.scene + ": interrupted; nothing was written");
   } catch (const ht::CompileError& e) {
     throw InputError(a.scene + ": " + e.what());
   } catch (const ht::PolygonizeError& e) {
