@@ -98,6 +98,15 @@ void run_cases(const std::vector<Case>& cases, double h) {
   }
 }
 
+// eight.off pushed into bunny00's flank, and armadillo at a third of bunny00's size on its back.
+NodeId shifted_eight(Builder& b) {
+  return b.affine(b.mesh(eight(), {0.05}), glm::translate(glm::dmat4(1.0), dvec3(0.35, 0.1, 0.0)));
+}
+NodeId small_armadillo(Builder& b) {
+  glm::dmat4 m = glm::translate(glm::dmat4(1.0), dvec3(0.3, 0.3, 0.0));
+  return b.affine(b.mesh(armadillo(), {10.0}), glm::scale(m, dvec3(0.004)));
+}
+
 // bunny00's left ear tip is near (-0.005, 0.494, -0.12).
 constexpr dvec3 kEar{-0.005, 0.5, -0.12};
 
@@ -119,6 +128,12 @@ TEST(LocalBooleans, PrimitivesAndMeshLeaves) {
        JobStrategy::TrimBoolean},
       {"eight u sphere", 2, [](Builder& b) { return b.unite({b.mesh(eight(), {0.05}), b.point({0.2, 0, 0.1}, {0.2})}); },
        JobStrategy::TrimBoolean},
+      {"bunny u eight", 2, [](Builder& b) { return b.unite({b.mesh(bunny(), {0.05}), shifted_eight(b)}); },
+       JobStrategy::TrimBoolean},
+      {"bunny - eight", 0, [](Builder& b) { return b.subtract({b.mesh(bunny(), {0.05}), shifted_eight(b)}); },
+       JobStrategy::TrimBoolean},
+      {"bunny u armadillo", 0, [](Builder& b) { return b.unite({b.mesh(bunny(), {0.05}), small_armadillo(b)}); },
+       JobStrategy::TrimBoolean},
   };
   run_cases(cases, 0.01);
 }
@@ -131,6 +146,10 @@ TEST(LocalBlends, PrimitivesAndMeshLeaves) {
        JobStrategy::TrimBlend},
       {"bunny + carving", 0,
        [](Builder& b) { return b.blend({b.mesh(bunny(), {0.05}), b.point({0.0, 0.1, 0.3}, {0.2, -1.5})}); },
+       JobStrategy::TrimBlend},
+      {"bunny + eight", 2, [](Builder& b) { return b.blend({b.mesh(bunny(), {0.05}), shifted_eight(b)}); },
+       JobStrategy::TrimBlend},
+      {"bunny + armadillo", 0, [](Builder& b) { return b.blend({b.mesh(bunny(), {0.05}), small_armadillo(b)}); },
        JobStrategy::TrimBlend},
       {"eight + segment", 2,
        [](Builder& b) { return b.blend({b.mesh(eight(), {0.05}), b.segment({0.2, 0, -0.3}, {0.5, 0, -0.3}, {0.12})}); },
@@ -149,6 +168,8 @@ TEST(LocalStrategies, FallBackWhereTheyCannot) {
   const std::vector<Case> cases = {
       {"bunny n box", 0,
        [](Builder& b) { return b.intersect({b.mesh(bunny(), {0.05}), b.box({-0.3, -0.6, -0.5}, {0.6, 0.2, 0.5}, {0.1})}); },
+       JobStrategy::TrimBoolean},
+      {"bunny n eight", 1, [](Builder& b) { return b.intersect({b.mesh(bunny(), {0.05}), shifted_eight(b)}); },
        JobStrategy::TrimBoolean},
       {"cropped sphere", 0, [](Builder& b) { return b.crop(b.point({0, 0, 0}, {1.0}), {-1, -1, -0.2}, {1, 0.3, 1}); },
        JobStrategy::TrimCrop},
