@@ -73,10 +73,12 @@ const TriangleMesh& operand(const LocalInput& in, std::size_t i) {
 // The operand's mesh with its edges longer than the precision split where `region` says the
 // other operands act (new vertices projected onto the operand's own surface): a coarse mesh's
 // long chords would otherwise cut a curved seam short. Vertices already there stay bit for bit.
-TriangleMesh refined(const TriangleMesh& mesh, const LocalInput& in, NodeId child, bool under_blend, const Aabb& region) {
+TriangleMesh refined(const TriangleMesh& mesh, const LocalInput& in, NodeId child, bool under_blend, const Aabb& region,
+                     double max_edge = 0.0) {
   const TapeEvaluator field(std::make_shared<const Tape>(compile_tape(in.graph, child, in.threshold, nullptr, under_blend)));
   const Aabb box = region.expanded(in.precision);
-  return warp_mesh(mesh, [](const glm::dvec3& p) { return p; }, field, in.threshold, 1.5 * in.precision, nullptr, &box);
+  return warp_mesh(mesh, [](const glm::dvec3& p) { return p; }, field, in.threshold,
+                   max_edge > 0 ? max_edge : 1.5 * in.precision, nullptr, &box);
 }
 
 void flip(TriangleMesh& m) {
@@ -193,19 +195,33 @@ TriangleMesh trim_boolean(const LocalInput& in, LocalStats* stats) {
   // inside it for an intersection; a difference keeps A outside B and B inside A, turned over.
   const bool keep_a_outside = kind != NodeKind::Intersection;
   const bool keep_b_outside = kind == NodeKind::Union;
-  std::vector<TriangleMesh> pieces;
-  const Aabb meet = intersect(fa.support(), fb.support());
-  pieces.push_back(cut_mesh(refined(operand(in, 0), in, c[0], false, meet),
-                            keep_a_outside ? affine_of(fb, 1, -T) : affine_of(fb, -1, T), cut_options(in)));
-  pieces.push_back(cut_mesh(refined(operand(in, 1), in, c[1], false, meet),
-                            keep_b_outside ? affine_of(fa, 1, -T) : affine_of(fa, -1, T), cut_options(in)));
-  if (kind == NodeKind::Difference) flip(pieces[1]);
+  const Aabb meet = intersect(fa.support(), fb.support()), near = meet.expanded(2.0 * in.precision);
+  TriangleMesh ma = refined(operand(in, 0), in, c[0], false, meet), mb = refined(operand(in, 1), in, c[1], false, meet);
   st.operand_triangles = operand(in, 0).triangles.size() + operand(in, 1).triangles.size();
-  st.kept_triangles = count_triangles(pieces);
-  std::vector<std::uint8_t> seam;
-  TriangleMesh out = join(pieces, in, st, false, &seam);
-  // The seam is the crease: it stays. Only where the operands meet can the result intersect.
-  st.self_intersections = untangle(out, seam, *node_tape(in), T, meet.expanded(2.0 * in.precision));
+  TriangleMesh out;
+  // The cuts sample the other operand at vertices: a triangle can hide a small excursion of the
+  // other surface, and the seams then cross. Where they do, both operands are refined (edges
+  // halved each round) and cut again.
+  double edge = 1.5 * in.precision;
+  for (int round = 0;; ++round) {
+    std::vector<TriangleMesh> pieces;
+    pieces.push_back(cut_mesh(ma, keep_a_outside ? affine_of(fb, 1, -T) : affine_of(fb, -1, T), cut_options(in)));
+    pieces.push_back(cut_mesh(mb, keep_b_outside ? affine_of(fa, 1, -T) : affine_of(fa, -1, T), cut_options(in)));
+    if (kind == NodeKind::Difference) flip(pieces[1]);
+    st.kept_triangles = count_triangles(pieces);
+    std::vector<std::uint8_t> seam;
+    out = join(pieces, in, st, false, &seam);
+    // The seam is the crease: it stays. Only where the operands meet can the result intersect.
+    st.self_intersections = untangle(out, seam, *node_tape(in), T, near);
+    if (st.self_intersections == 0 || round == 2) break;
+    Aabb hot;
+    for (const auto& pair : intersections_in(out, near))
+      for (std::uint32_t t : pair)
+        for (int k = 0; k < 3; ++k) hot.grow(out.positions[out.triangles[t][k]]);
+    edge *= 0.5;
+    ma = refined(ma, in, c[0], false, hot, edge);
+    mb = refined(mb, in, c[1], false, hot, edge);
+  }
   if (stats) *stats = st;
   return out;
 }
