@@ -118,16 +118,21 @@ TriangleMesh patch(const LocalInput& in, const Aabb& clip, std::function<bool(co
   return polygonize(in.graph, in.node, in.threshold, o, &st.patch);
 }
 
-// Stitches the pieces. `onto_earlier` where they meet smoothly (blends), or where the earlier
-// piece's seam is exact and the later one's only near it (crop caps); not at Boolean creases.
-TriangleMesh join(std::vector<TriangleMesh>& pieces, const LocalInput& in, LocalStats& st, bool onto_earlier,
+// Seams of this node: gaps up to 3/4 of the precision; `onto_earlier` where the pieces meet
+// smoothly, not at a crease (meshers/stitch.hpp).
+StitchOptions seam_options(const LocalInput& in, bool onto_earlier) {
+  StitchOptions so;
+  so.max_gap = 0.75 * in.precision;
+  so.onto_earlier = onto_earlier;
+  return so;
+}
+
+// Stitches the non-empty pieces.
+TriangleMesh join(const std::vector<TriangleMesh>& pieces, const StitchOptions& so, LocalStats& st,
                   std::vector<std::uint8_t>* seam = nullptr) {
   std::vector<const TriangleMesh*> ptrs;
   for (const TriangleMesh& p : pieces)
     if (!p.triangles.empty()) ptrs.push_back(&p);
-  StitchOptions so;
-  so.max_gap = 0.75 * in.precision;
-  so.onto_earlier = onto_earlier;
   return stitch(ptrs, so, &st.stitch, seam);
 }
 
@@ -210,7 +215,7 @@ TriangleMesh trim_boolean(const LocalInput& in, LocalStats* stats) {
     if (kind == NodeKind::Difference) flip(pieces[1]);
     st.kept_triangles = count_triangles(pieces);
     std::vector<std::uint8_t> seam;
-    out = join(pieces, in, st, false, &seam);
+    out = join(pieces, seam_options(in, false), st, &seam);
     // The seam is the crease: it stays. Only where the operands meet can the result intersect.
     st.self_intersections = untangle(out, seam, *node_tape(in), T, near);
     if (st.self_intersections == 0 || round == 2) break;
@@ -331,10 +336,64 @@ TriangleMesh trim_blend(const LocalInput& in, LocalStats* stats) {
   st.kept_triangles = count_triangles(pieces);
   TriangleMesh out;
   if (meets.empty()) {
-    out = join(pieces, in, st, true);  // nothing meets: the operands' meshes as they are
+    out = join(pieces, seam_options(in, true), st);  // nothing meets: the operands' meshes as they are
   } else {
     const auto field = node_tape(in);
     out = close_with_bands(pieces, blend_patch(in, bf, meets, clip, *field, st), clip, *field, in, st);
+  }
+  if (stats) *stats = st;
+  return out;
+}
+
+TriangleMesh trim_local_blend(const LocalInput& in, LocalStats* stats) {
+  LocalStats st;
+  const auto c = in.graph->children_of(in.node);  // a, b, region
+  const double T = in.threshold, eps = 1e-3;      // fR blends fully at 1
+  const NodeField fa(in, c[0], true), fb(in, c[1], true), fr(in, c[2], true);
+  // Keep an operand where the other does not reach it (the union's part) and R does not act.
+  auto keep = [&fr, T, eps](const NodeField& other) -> BatchField {
+    return [other, fr, T, eps](std::span<const glm::dvec3> points, std::span<double> values) {
+      std::vector<double> r(points.size());
+      other(points, values);
+      fr(points, r);
+      for (std::size_t k = 0; k < points.size(); ++k) values[k] = std::max(values[k] - T, r[k] - eps);
+    };
+  };
+  const Aabb both = intersect(fa.support(), fb.support());
+  const Aabb acts = intersect(fr.support(), merge(fa.support(), fb.support())).expanded(2.0 * in.precision);
+  const Aabb near = merge(both, acts);
+  std::vector<TriangleMesh> pieces;
+  pieces.push_back(cut_mesh(refined(operand(in, 0), in, c[0], true, near), keep(fb), cut_options(in)));
+  pieces.push_back(cut_mesh(refined(operand(in, 1), in, c[1], true, near), keep(fa), cut_options(in)));
+  st.operand_triangles = operand(in, 0).triangles.size() + operand(in, 1).triangles.size();
+  st.kept_triangles = count_triangles(pieces);
+  // The union's crease is welded exactly (a tighter gap: where R acts the pieces part, and
+  // their boundary there stays open for the bands).
+  StitchOptions so = seam_options(in, false);
+  so.max_gap = 0.3 * in.precision;
+  so.allow_open = true;
+  const TriangleMesh joined = join(pieces, so, st);
+  TriangleMesh out;
+  if (st.stitch.left_open == 0 || acts.empty()) {
+    out = joined;
+    st.self_intersections = intersections_in(out, near.expanded(2.0 * in.precision)).size();
+  } else {
+    // The blended part: the node's surface where R may act, cut to where it does.
+    const Graph* graph = in.graph.get();
+    const NodeId region = c[2];
+    const double margin = 2.0 * in.precision;
+    const TriangleMesh p = patch(in, acts, [graph, region, T, eps, margin](const Aabb& brick) {
+      return field_interval(*graph, region, T, brick.expanded(margin), true).hi >= eps;
+    }, st, true);  // where the region fades out the surface turns into the union's crease
+    const BatchField in_region = [fr, eps](std::span<const glm::dvec3> points, std::span<double> values) {
+      fr(points, values);
+      for (double& v : values) v = eps - v;
+    };
+    const auto field = node_tape(in);
+    TriangleMesh side = pull_back_boundary(cut_mesh(p, in_region, cut_options(in)));
+    relax_boundary(side, *field, T);
+    st.patch_triangles = side.triangles.size();
+    out = close_with_bands({joined}, side, acts, *field, in, st);
   }
   if (stats) *stats = st;
   return out;

@@ -10,8 +10,9 @@
 //             the same) each operand's mesh is cut along the other's surface {f_other = T},
 //             by root finding on the other's tape, so both cuts lie on the intersection curve
 //             and the crease stays sharp. No new surface is needed.
-//   crop      the child's mesh is cut by the box exactly; the caps are polygonized only in
-//             bricks near the box's faces and cut along the crease {f_child = h_box}.
+//   crop      the child's mesh is cut by the box exactly; each opening is closed by a planar
+//             cap (meshers/caps.hpp).
+//   local blend  as a union outside the region's reach, as a blend inside it.
 // The pieces are joined by meshers/stitch.hpp. Each function throws LocalFailure (or
 // StitchError / PolygonizeError) when it cannot build its mesh; the mesh plan
 // (meshers/mesh_plan.hpp) then falls back to global polygonization and reports why.
@@ -67,5 +68,9 @@ inline constexpr std::size_t kMaxLocalBlendOperands = 8;
 TriangleMesh trim_blend(const LocalInput& in, LocalStats* stats = nullptr);
 TriangleMesh trim_boolean(const LocalInput& in, LocalStats* stats = nullptr);
 TriangleMesh trim_crop(const LocalInput& in, LocalStats* stats = nullptr);
+/// Local blend (section 3.2.2): the operands trimmed where the other reaches them or the region
+/// acts, their union's crease welded, the blended part polygonized where the region acts and
+/// joined by bands. Children: a, b, region; `child_meshes` holds a's and b's.
+TriangleMesh trim_local_blend(const LocalInput& in, LocalStats* stats = nullptr);
 
 }  // namespace ht

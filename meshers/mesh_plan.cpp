@@ -27,6 +27,7 @@ const char* to_string(JobStrategy s) {
     case JobStrategy::TrimBlend: return "trim blend";
     case JobStrategy::TrimBoolean: return "trim boolean";
     case JobStrategy::TrimCrop: return "trim crop";
+    case JobStrategy::TrimLocalBlend: return "trim local blend";
   }
   return "?";
 }
@@ -71,6 +72,11 @@ class Planner {
     if (s == JobStrategy::Global) {
       std::vector<std::uint8_t> seen(g_.size(), 0);
       ffds_under(n, seen, deps);
+    } else if (s == JobStrategy::TrimLocalBlend) {  // the region is a field, not a surface
+      const auto c = g_.children_of(n);
+      deps = {need(c[0]), need(c[1])};
+      std::vector<std::uint8_t> seen(g_.size(), 0);
+      ffds_under(c[2], seen, deps);
     } else if (s != JobStrategy::SharedLeaf && s != JobStrategy::Sweep) {
       for (NodeId c : g_.children_of(n)) deps.push_back(need(c));
     }
@@ -135,6 +141,7 @@ class Planner {
       case NodeKind::Difference:
         return operands == 2 ? set(JobStrategy::TrimBoolean, why) : set(JobStrategy::Global, JobReason::NoLocalMethod);
       case NodeKind::Crop: return set(JobStrategy::TrimCrop, why);
+      case NodeKind::LocalBlend: return set(JobStrategy::TrimLocalBlend, why);
       default: return set(JobStrategy::Global, JobReason::NoLocalMethod);
     }
   }
@@ -325,7 +332,8 @@ std::shared_ptr<const TriangleMesh> Runner::trim(const Job& job, const std::shar
   try {
     TriangleMesh m = job.strategy == JobStrategy::TrimBlend     ? trim_blend(in, &r.local)
                      : job.strategy == JobStrategy::TrimBoolean ? trim_boolean(in, &r.local)
-                                                                : trim_crop(in, &r.local);
+                     : job.strategy == JobStrategy::TrimCrop    ? trim_crop(in, &r.local)
+                                                                : trim_local_blend(in, &r.local);
     r.polygonized = r.local.patched;
     r.polygonize = r.local.patch;
     cause = local_defect(m, r.local);

@@ -9,7 +9,7 @@
 //   warped child    the child's mesh moved by the warp, stretched edges split
 //   deformed child  an ffd: the child's mesh deformed by the lattice becomes the ffd's mesh and
 //                   its field (meshers/ffd.hpp); every job whose field reads the ffd waits for it
-//   trim blend / trim Boolean / trim crop   the local strategies (meshers/local_ops.hpp) on
+//   trim blend / Boolean / crop / local blend   the local strategies (meshers/local_ops.hpp) on
 //                   the children's meshes; the result is checked (closed, manifold, oriented,
 //                   no degenerate triangle, no self-intersection) and, failing that, the node is
 //                   polygonized globally and the report says why
@@ -43,7 +43,7 @@ enum class MeshStrategy : std::uint8_t { Auto, Global, Local };
 
 /// What a job did.
 enum class JobStrategy : std::uint8_t {
-  SharedLeaf, Sweep, WarpedChild, DeformedChild, Global, TrimBlend, TrimBoolean, TrimCrop
+  SharedLeaf, Sweep, WarpedChild, DeformedChild, Global, TrimBlend, TrimBoolean, TrimCrop, TrimLocalBlend
 };
 /// Why it did that.
 enum class JobReason : std::uint8_t {
@@ -52,7 +52,7 @@ enum class JobReason : std::uint8_t {
   Requested,      ///< the requested strategy (MeshOptions::strategy)
   LowOverlap,     ///< a blend with rho <= blend_overlap
   HighOverlap,    ///< a blend with rho > blend_overlap
-  NoLocalMethod,  ///< no local strategy for this node (local blend, n-ary Booleans, many operands)
+  NoLocalMethod,  ///< no local strategy for this node (n-ary Booleans, blends of many operands)
   Fallback,       ///< the local strategy failed; see NodeReport::fallback_cause
 };
 const char* to_string(JobStrategy s);

@@ -139,11 +139,17 @@ void match(const Soup& s, const Boundary& b, const std::vector<Partner>& partner
     std::uint32_t v, w;
   };
   std::vector<Weld> welds;
+  std::vector<std::uint8_t> open(s.positions.size(), 0);
   for (std::uint32_t v = 0; v < s.positions.size(); ++v) {
     if (b.out_edge[v] == kNo) continue;
     ++st.boundary_vertices;
     const Partner& p = partner[v];
     const glm::dvec3 x = s.positions[v];
+    if ((p.edge == kNo || p.distance > gap_allowed(s, b, p.edge, o)) && o.allow_open) {
+      open[v] = 1;
+      ++st.left_open;
+      continue;
+    }
     if (p.edge == kNo || p.distance > gap_allowed(s, b, p.edge, o))
       throw StitchError("a boundary vertex at (" + std::to_string(x.x) + ", " + std::to_string(x.y) + ", " +
                         std::to_string(x.z) + ") has no other piece within " + std::to_string(o.max_gap));
@@ -174,7 +180,7 @@ void match(const Soup& s, const Boundary& b, const std::vector<Partner>& partner
     ++st.welded;
   }
   for (std::uint32_t v = 0; v < s.positions.size(); ++v) {
-    if (b.out_edge[v] == kNo) continue;
+    if (b.out_edge[v] == kNo || open[v]) continue;
     const Partner& p = partner[v];
     const std::uint32_t r = uf.find(v);
     if (r == uf.find(b.from[p.edge]) || r == uf.find(b.to[p.edge])) continue;

@@ -36,10 +36,13 @@ struct StitchOptions {
   /// the earlier piece's polyline exactly: needed where pieces meet almost tangentially (blends),
   /// where a zigzag between two samplings of one curve would fold triangles; not at creases.
   bool onto_earlier = true;
+  /// Leave the boundary vertices that have no partner within max_gap on the boundary instead
+  /// of failing (a seam that ends where the pieces part, to be closed by something else).
+  bool allow_open = false;
 };
 
 struct StitchStats {
-  std::size_t boundary_vertices = 0, welded = 0, inserted = 0, fans = 0;
+  std::size_t boundary_vertices = 0, welded = 0, inserted = 0, fans = 0, left_open = 0;
   double largest_gap = 0;  ///< the largest distance from a boundary vertex to its partner
 };
 

@@ -202,6 +202,25 @@ TEST(LocalCrops, PrimitivesAndMeshLeaves) {
   run_cases(cases, 0.01);
 }
 
+// The paper's Figure 5: a union, blended only where the region reaches.
+TEST(LocalBlends, LocalBlendIsAUnionOutsideItsRegion) {
+  const std::vector<Case> cases = {
+      {"crossed capsules", 0,
+       [](Builder& b) {
+         return b.local_blend(b.segment({-1, 0, 0}, {1, 0, 0}, {0.5}), b.segment({0, -1, 0}, {0, 1, 0}, {0.4}),
+                              b.point({0.25, 0.25, 0}, {0.4}));
+       },
+       JobStrategy::TrimLocalBlend},
+      {"bunny on a perch", 0,
+       [](Builder& b) {
+         return b.local_blend(b.mesh(bunny(), {0.05}), b.segment({-0.6, -0.45, -0.1}, {0.6, -0.45, -0.1}, {0.25}),
+                              b.point({0.3, -0.4, 0.0}, {0.3}));
+       },
+       JobStrategy::TrimLocalBlend},
+  };
+  run_cases(cases, 0.01);
+}
+
 TEST(LocalStrategies, UntouchedMeshLeafVerticesAreBitIdentical) {
   Builder b(kT);
   const NodeId sphere = b.point(kEar, {0.12});

@@ -259,7 +259,7 @@ nlohmann::json node_json(const ht::Graph& g, const ht::NodeReport& e) {
     n["bricks"] = {{"total", e.polygonize.bricks_total}, {"active", e.polygonize.bricks_active},
                    {"points_evaluated", e.polygonize.points_evaluated}};
   if (e.strategy == ht::JobStrategy::TrimBlend || e.strategy == ht::JobStrategy::TrimBoolean ||
-      e.strategy == ht::JobStrategy::TrimCrop)
+      e.strategy == ht::JobStrategy::TrimCrop || e.strategy == ht::JobStrategy::TrimLocalBlend)
     n["local"] = {{"operand_triangles", e.local.operand_triangles},
                   {"kept_triangles", e.local.kept_triangles},
                   {"patch_triangles", e.local.patch_triangles},
