@@ -1,7 +1,7 @@
 // Planar caps: closing the openings that a box leaves in a mesh it cuts (the crop's local
-// strategy, the paper's wings cut out of the Victory). Every boundary loop of the cut mesh lies
-// on one face of the box; each is closed by a triangulation of the polygon it bounds in that
-// plane: ear clipping (best-shaped ear first), then Lawson edge flips to the constrained
+// strategy, the paper's wings cut out of the Victory; the crop cuts one face's plane at a time
+// and caps after each). Every boundary loop of the cut mesh lies on one face of the box; each is
+// closed by a triangulation of the polygon it bounds in that plane: ear clipping (best-shaped ear first), then Lawson edge flips to the constrained
 // Delaunay triangulation of the polygon. The caps use the loops' own vertices, so the seam is
 // exact and the crease along it stays sharp; loop vertices are set onto their plane exactly.
 #pragma once

@@ -164,12 +164,13 @@ TEST(LocalBlends, PrimitivesAndMeshLeaves) {
 }
 
 // Where a local strategy cannot make a sound mesh, the node is polygonized globally and the
-// report says why. The case known to need that today: a crop whose opening crosses an edge of
-// the box (planar caps close one face per opening). When one starts to succeed, move it to the
-// lists above.
+// report says why. The case known to need that today: a crop whose cap has a hole (a ring cut
+// through its middle: planar caps close simple polygons). When one starts to succeed, move it
+// to the lists above.
 TEST(LocalStrategies, FallBackWhereTheyCannot) {
   const std::vector<Case> cases = {
-      {"cropped sphere", 0, [](Builder& b) { return b.crop(b.point({0, 0, 0}, {1.0}), {-1, -1, -0.2}, {1, 0.3, 1}); },
+      {"half a ring", 0,
+       [](Builder& b) { return b.crop(b.circle({0, 0, 0}, {0, 0, 1}, 0.5, {0.3}), {-1, -1, -1}, {1, 1, 0}); },
        JobStrategy::TrimCrop},
   };
   for (const Case& c : cases) {
@@ -188,6 +189,10 @@ TEST(LocalCrops, PrimitivesAndMeshLeaves) {
   const std::vector<Case> cases = {
       {"cropped bunny", 0, [](Builder& b) { return b.crop(b.mesh(bunny(), {0.05}), {-0.6, -0.1, -0.5}, {0.6, 0.6, 0.5}); },
        JobStrategy::TrimCrop},
+      {"sphere, a corner kept", 0, [](Builder& b) { return b.crop(b.point({0, 0, 0}, {1.0}), {-1, -1, -0.2}, {1, 0.3, 1}); },
+       JobStrategy::TrimCrop},
+      {"bunny, a corner cut off", 0,
+       [](Builder& b) { return b.crop(b.mesh(bunny(), {0.05}), {-0.6, -0.6, -0.5}, {0.3, 0.25, 0.2}); }, JobStrategy::TrimCrop},
       {"sphere, top cut off", 0, [](Builder& b) { return b.crop(b.point({0, 0, 0}, {1.0}), {-1, -1, -1}, {1, 1, 0.2}); },
        JobStrategy::TrimCrop},
       {"eight, both ends cut off", 0,
