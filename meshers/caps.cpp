@@ -3,6 +3,7 @@
 #include "meshers/bridge.hpp"
 
 #include <glm/vec2.hpp>
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <array>
@@ -153,11 +154,18 @@ void cap_box_openings(TriangleMesh& mesh, const Aabb& box, double tol, CapStats*
       if (i != j && rings[i].face.axis == rings[j].face.axis && rings[i].face.hi == rings[j].face.hi &&
           inside_polygon(rings[j].q, rings[i].q[0]))
         throw CapError("cut loops nest in one face (a cap with a hole)");
-  for (Ring& r : rings) {
-    auto tris = ear_clip(r.q);
-    st.flips += delaunay_flips(r.q, tris);
-    for (const auto& t : tris) mesh.triangles.push_back({r.vertices[t[0]], r.vertices[t[1]], r.vertices[t[2]]});
-    st.triangles += tris.size();
+  // Each opening on its own, in parallel; appended in loop order.
+  std::vector<std::vector<std::array<std::uint32_t, 3>>> tris(rings.size());
+  std::vector<std::size_t> flips(rings.size(), 0);
+  tbb::parallel_for(std::size_t(0), rings.size(), [&](std::size_t i) {
+    tris[i] = ear_clip(rings[i].q);
+    flips[i] = delaunay_flips(rings[i].q, tris[i]);
+  });
+  for (std::size_t i = 0; i < rings.size(); ++i) {
+    for (const auto& t : tris[i])
+      mesh.triangles.push_back({rings[i].vertices[t[0]], rings[i].vertices[t[1]], rings[i].vertices[t[2]]});
+    st.triangles += tris[i].size();
+    st.flips += flips[i];
     ++st.loops;
   }
   if (stats) *stats = st;
