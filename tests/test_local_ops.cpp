@@ -294,7 +294,8 @@ TEST(LocalStrategies, RandomTreesWithMeshLeavesStayClosed) {
       EXPECT_TRUE(k.watertight()) << "tree " << i;
       for (const NodeReport& e : r.nodes) {
         ++jobs;
-        if (e.reason == JobReason::Fallback) ++fallbacks, ++causes[e.fallback_cause.substr(0, 40)];
+        if (e.reason == JobReason::Fallback)
+          ++fallbacks, ++causes[std::string(kind_name(t.graph().kind[e.node])) + ": " + e.fallback_cause.substr(0, 60)];
         if (e.strategy == JobStrategy::TrimBlend || e.strategy == JobStrategy::TrimBoolean || e.strategy == JobStrategy::TrimCrop)
           ++local;
       }
