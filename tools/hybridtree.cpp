@@ -265,7 +265,11 @@ nlohmann::json node_json(const ht::Graph& g, const ht::NodeReport& e) {
                   {"patch_triangles", e.local.patch_triangles},
                   {"stitch_welded", e.local.stitch.welded},
                   {"stitch_inserted", e.local.stitch.inserted},
-                  {"stitch_largest_gap", e.local.stitch.largest_gap}};
+                  {"stitch_largest_gap", e.local.stitch.largest_gap},
+                  {"band_loops", e.local.bridge.loops},
+                  {"band_triangles", e.local.bridge.band_triangles},
+                  {"band_widest", e.local.bridge.widest},
+                  {"self_intersections", e.local.self_intersections}};
   if (e.edges_split) n["edges_split"] = e.edges_split;
   return n;
 }
