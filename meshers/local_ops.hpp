@@ -6,8 +6,9 @@
 //             surface is M_i's, to within eps / |grad f_i|); the blend's own surface is
 //             polygonized only in bricks where two operands' supports meet, and that patch is
 //             cut to where every g_i >= eps. A negative operand has no mesh: it only trims.
-//   Booleans  (binary union, intersection, difference; min/max or R-functions: the surface is
-//             the same) each operand's mesh is cut along the other's surface {f_other = T},
+//   Booleans  (union, intersection, difference of up to 16 operands, as a left fold of binary
+//             steps; min/max or R-functions: the surface is the same) at each step both meshes
+//             are cut along the other's surface {f_other = T},
 //             by root finding on the other's tape, so both cuts lie on the intersection curve
 //             and the crease stays sharp. No new surface is needed.
 //   crop      the child's mesh is cut by the box exactly; each opening is closed by a planar
@@ -64,6 +65,8 @@ double blend_overlap(const Graph& graph, NodeId blend);
 
 /// Operands a local blend handles at most (each kept part is tested against all the others).
 inline constexpr std::size_t kMaxLocalBlendOperands = 8;
+/// Operands a local Boolean folds at most (each step cuts the result so far again).
+inline constexpr std::size_t kMaxLocalBooleanOperands = 16;
 
 TriangleMesh trim_blend(const LocalInput& in, LocalStats* stats = nullptr);
 TriangleMesh trim_boolean(const LocalInput& in, LocalStats* stats = nullptr);

@@ -139,7 +139,8 @@ class Planner {
       case NodeKind::Union:
       case NodeKind::Intersection:
       case NodeKind::Difference:
-        return operands == 2 ? set(JobStrategy::TrimBoolean, why) : set(JobStrategy::Global, JobReason::NoLocalMethod);
+        return operands <= kMaxLocalBooleanOperands ? set(JobStrategy::TrimBoolean, why)
+                                                    : set(JobStrategy::Global, JobReason::NoLocalMethod);
       case NodeKind::Crop: return set(JobStrategy::TrimCrop, why);
       case NodeKind::LocalBlend: return set(JobStrategy::TrimLocalBlend, why);
       default: return set(JobStrategy::Global, JobReason::NoLocalMethod);
@@ -289,7 +290,7 @@ std::shared_ptr<const TriangleMesh> Runner::execute(const Job& job, NodeReport& 
     case JobStrategy::WarpedChild: {
       const TapeEvaluator child_field(std::make_shared<const Tape>(compile_tape(g, g->children_of(n)[0], T)));
       WarpRemeshStats ws;
-      auto mesh = std::make_shared<const TriangleMesh>(warp_mesh(input(job, 0), forward_map(*g, n), child_field, T, 1.5 * h, &ws));
+      auto mesh = std::make_shared<const TriangleMesh>(warp_mesh(input(job, 0), forward_map(*g, n), &child_field, T, 1.5 * h, &ws));
       r.edges_split = ws.edges_split;
       return mesh;
     }

@@ -44,7 +44,7 @@ std::function<glm::dvec3(const glm::dvec3&)> forward_map(const Graph& graph, Nod
 }
 
 TriangleMesh warp_mesh(const TriangleMesh& child, const std::function<glm::dvec3(const glm::dvec3&)>& warp,
-                       const TapeEvaluator& field, double T, double max_edge, WarpRemeshStats* stats,
+                       const TapeEvaluator* field, double T, double max_edge, WarpRemeshStats* stats,
                        const Aabb* region) {
   std::vector<glm::dvec3> local = child.positions;  // child space
   std::vector<glm::uvec3> tris = child.triangles;
@@ -76,7 +76,7 @@ TriangleMesh warp_mesh(const TriangleMesh& child, const std::function<glm::dvec3
       const auto a = std::uint32_t(long_edges[i] >> 32), b = std::uint32_t(long_edges[i] & 0xffffffffu);
       mids[i] = 0.5 * (local[a] + local[b]);
     }
-    project(mids, field, T);
+    if (field) project(mids, *field, T);
     std::unordered_map<std::uint64_t, std::uint32_t> mid_of;
     mid_of.reserve(long_edges.size() * 2);
     for (std::size_t i = 0; i < long_edges.size(); ++i) {

@@ -27,8 +27,10 @@ struct WarpRemeshStats {
 /// Only edges the warp lengthens are split (a rigid motion splits none). With `region`, every
 /// edge longer than max_edge whose warped midpoint lies in that box is split, stretched or not
 /// (the local strategies refine a coarse operand near a seam this way).
+/// A null `child_field` leaves new vertices at the midpoints (for meshes with no one field of
+/// their own, such as a partial Boolean result).
 TriangleMesh warp_mesh(const TriangleMesh& child_mesh, const std::function<glm::dvec3(const glm::dvec3&)>& warp,
-                       const TapeEvaluator& child_field, double threshold, double max_edge,
+                       const TapeEvaluator* child_field, double threshold, double max_edge,
                        WarpRemeshStats* stats = nullptr, const Aabb* region = nullptr);
 
 /// The forward map of warp node `node` (affine, twist, taper, bend or ffd).

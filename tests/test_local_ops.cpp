@@ -132,6 +132,18 @@ TEST(LocalBooleans, PrimitivesAndMeshLeaves) {
        JobStrategy::TrimBoolean},
       {"bunny - eight", 0, [](Builder& b) { return b.subtract({b.mesh(bunny(), {0.05}), shifted_eight(b)}); },
        JobStrategy::TrimBoolean},
+      {"three balls and a bunny, united", 0,
+       [](Builder& b) {
+         return b.unite({b.point({0, 0, 0}, {1.0}), b.point({0.5, 0, 0}, {1.0}), b.point({0.25, 0.45, 0}, {1.0}),
+                         b.mesh(bunny(), {0.05})});
+       },
+       JobStrategy::TrimBoolean},
+      {"bunny carved three times", 1,
+       [](Builder& b) {
+         return b.subtract({b.mesh(bunny(), {0.05}), b.point({0.1, 0.1, 0.35}, {0.35}),
+                            b.segment({-0.6, -0.2, 0}, {0.6, -0.2, 0}, {0.15}), b.point({-0.005, 0.5, -0.12}, {0.1})});
+       },
+       JobStrategy::TrimBoolean},
       {"bunny n box", 0,
        [](Builder& b) { return b.intersect({b.mesh(bunny(), {0.05}), b.box({-0.3, -0.6, -0.5}, {0.6, 0.2, 0.5}, {0.1})}); },
        JobStrategy::TrimBoolean},
