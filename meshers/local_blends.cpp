@@ -1,0 +1,202 @@
+// Trimmed blends and local blends (meshers/local_ops.hpp): operands cut where others act, the
+// node's own surface polygonized only there, joined by bands.
+#include "meshers/local_ops.hpp"
+
+#include "meshers/local_parts.hpp"
+#include "meshers/bridge.hpp"
+#include "meshers/relax.hpp"
+#include "runtime/tape.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <vector>
+
+namespace ht {
+
+using namespace local;
+
+double blend_overlap(const Graph& g, NodeId n) {
+  const auto c = g.children_of(n);
+  auto volume = [](const Aabb& b) { return b.empty() ? 0.0 : b.size().x * b.size().y * b.size().z; };
+  double rho = 0.0;
+  for (std::size_t i = 0; i < c.size(); ++i)
+    for (std::size_t j = i + 1; j < c.size(); ++j) {
+      const Aabb& a = g.support(c[i], true);
+      const Aabb& b = g.support(c[j], true);
+      if (!a.finite() || !b.finite()) return 1.0;
+      const double both = volume(intersect(a, b)), either = volume(a) + volume(b) - both;
+      if (either > 0) rho = std::max(rho, both / either);
+    }
+  return rho;
+}
+
+namespace {
+
+// The operands' fields of a blend and the cut functions built from them. With
+// g_i = sum over j != i of |f_j|: an operand's mesh is kept where g_i < eps (nothing else acts
+// there), the patch where every g_i >= eps.
+class BlendFields {
+ public:
+  BlendFields(const LocalInput& in, std::span<const NodeId> children) : eps(1e-3 * in.threshold) {
+    for (NodeId child : children) fields.emplace_back(in, child, true);
+  }
+  /// g_i - eps for operand i; eps - min_i g_i for i == size() (the patch's cut).
+  BatchField cut(std::size_t i) const {
+    return [this, i](std::span<const glm::dvec3> points, std::span<double> values) {
+      const std::size_t n = points.size();
+      std::vector<double> total(n, 0.0), largest(n, 0.0), own(n, 0.0), f(n);
+      for (std::size_t j = 0; j < fields.size(); ++j) {
+        fields[j](points, f);
+        for (std::size_t k = 0; k < n; ++k) {
+          total[k] += std::abs(f[k]);
+          largest[k] = std::max(largest[k], std::abs(f[k]));
+          if (j == i) own[k] = std::abs(f[k]);
+        }
+      }
+      for (std::size_t k = 0; k < n; ++k)
+        values[k] = i < fields.size() ? (total[k] - own[k]) - eps : eps - (total[k] - largest[k]);
+    };
+  }
+  /// Where two operands' supports meet, widened by `margin`; `clip` receives their union.
+  std::vector<Aabb> meets(double margin, Aabb& clip) const {
+    std::vector<Aabb> out;
+    for (std::size_t i = 0; i < fields.size(); ++i)
+      for (std::size_t j = i + 1; j < fields.size(); ++j) {
+        const Aabb both = intersect(fields[i].support(), fields[j].support());
+        if (!both.empty()) out.push_back(both.expanded(margin)), clip = merge(clip, out.back());
+      }
+    return out;
+  }
+
+  /// Below eps an operand's field moves the others' surfaces by at most eps / |grad f|.
+  const double eps;
+  std::vector<NodeField> fields;
+};
+
+// The blend's own surface where two operands act, cut to where every g_i >= eps, pulled back
+// one ring and its loops straightened: the far side of the bands.
+TriangleMesh blend_patch(const LocalInput& in, const BlendFields& bf, const std::vector<Aabb>& meets, const Aabb& clip,
+                         const TapeEvaluator& field, LocalStats& st) {
+  const Graph* graph = in.graph.get();
+  const auto c = graph->children_of(in.node);
+  const double margin = 2.0 * in.precision, T = in.threshold, eps = bf.eps;
+  // Only bricks where two operands may both reach eps (interval analysis), two cells wider.
+  const TriangleMesh p = patch(in, clip, [meets, graph, c, eps, margin, T](const Aabb& brick) {
+    if (std::none_of(meets.begin(), meets.end(), [&](const Aabb& m) { return overlaps(m, brick); })) return false;
+    const Aabb wide = brick.expanded(margin);
+    int acting = 0;
+    for (NodeId child : c) {
+      const Interval iv = field_interval(*graph, child, T, wide, true);
+      acting += iv.hi >= eps || iv.lo <= -eps;
+    }
+    return acting >= 2;
+  }, st, false);  // a blend is smooth where operands meet
+  TriangleMesh side = pull_back_boundary(cut_mesh(p, bf.cut(c.size()), cut_options(in)));
+  relax_boundary(side, field, T);
+  st.patch_triangles = side.triangles.size();
+  return side;
+}
+
+// The operands' trimmed meshes and the patch joined by bands, evened out and untangled.
+TriangleMesh close_with_bands(const std::vector<TriangleMesh>& pieces, const TriangleMesh& side, const Aabb& clip,
+                              const TapeEvaluator& field, const LocalInput& in, LocalStats& st) {
+  std::vector<const TriangleMesh*> ops;
+  for (const TriangleMesh& piece : pieces)
+    if (!piece.triangles.empty()) ops.push_back(&piece);
+  std::uint32_t first_patch = 0;
+  TriangleMesh out = bridge(ops, side, 8.0 * in.precision, &st.bridge, &first_patch);
+  relax_band(out, first_patch, field, in.threshold);
+  // The operands' trimmed edges stay; everything else may move to undo a fold.
+  std::vector<std::uint8_t> fixed(out.positions.size(), 0);
+  for (const auto& loop : boundary_loops(join_operands(ops)))
+    for (std::uint32_t v : loop) fixed[v] = 1;
+  st.self_intersections = untangle(out, fixed, field, in.threshold, clip);
+  return out;
+}
+
+}  // namespace
+
+TriangleMesh trim_blend(const LocalInput& in, LocalStats* stats) {
+  LocalStats st;
+  const auto c = in.graph->children_of(in.node);
+  if (c.size() > kMaxLocalBlendOperands)
+    throw LocalFailure("a blend of " + std::to_string(c.size()) + " operands (local meshing takes at most " +
+                       std::to_string(kMaxLocalBlendOperands) + ")");
+  const BlendFields bf(in, c);
+  Aabb clip;
+  const std::vector<Aabb> meets = bf.meets(2.0 * in.precision, clip);
+  std::vector<TriangleMesh> pieces;
+  for (std::size_t i = 0; i < c.size(); ++i) {
+    if (i >= in.child_meshes.size() || !in.child_meshes[i] || in.child_meshes[i]->triangles.empty()) continue;
+    const TriangleMesh& m = *in.child_meshes[i];
+    st.operand_triangles += m.triangles.size();
+    pieces.push_back(cut_mesh(clip.empty() ? m : refined(m, in, c[i], true, clip), bf.cut(i), cut_options(in)));
+  }
+  st.kept_triangles = count_triangles(pieces);
+  TriangleMesh out;
+  if (meets.empty()) {
+    out = join(pieces, seam_options(in, true), st);  // nothing meets: the operands' meshes as they are
+  } else {
+    const auto field = node_tape(in);
+    out = close_with_bands(pieces, blend_patch(in, bf, meets, clip, *field, st), clip, *field, in, st);
+  }
+  if (stats) *stats = st;
+  return out;
+}
+
+TriangleMesh trim_local_blend(const LocalInput& in, LocalStats* stats) {
+  LocalStats st;
+  const auto c = in.graph->children_of(in.node);  // a, b, region
+  const double T = in.threshold, eps = 1e-3;      // fR blends fully at 1
+  const NodeField fa(in, c[0], true), fb(in, c[1], true), fr(in, c[2], true);
+  // Keep an operand where the other does not reach it (the union's part) and R does not act.
+  auto keep = [&fr, T, eps](const NodeField& other) -> BatchField {
+    return [other, fr, T, eps](std::span<const glm::dvec3> points, std::span<double> values) {
+      std::vector<double> r(points.size());
+      other(points, values);
+      fr(points, r);
+      for (std::size_t k = 0; k < points.size(); ++k) values[k] = std::max(values[k] - T, r[k] - eps);
+    };
+  };
+  const Aabb both = intersect(fa.support(), fb.support());
+  const Aabb acts = intersect(fr.support(), merge(fa.support(), fb.support())).expanded(2.0 * in.precision);
+  const Aabb near = merge(both, acts);
+  std::vector<TriangleMesh> pieces;
+  pieces.push_back(cut_mesh(refined(operand(in, 0), in, c[0], true, near), keep(fb), cut_options(in)));
+  pieces.push_back(cut_mesh(refined(operand(in, 1), in, c[1], true, near), keep(fa), cut_options(in)));
+  st.operand_triangles = operand(in, 0).triangles.size() + operand(in, 1).triangles.size();
+  st.kept_triangles = count_triangles(pieces);
+  // The union's crease is welded exactly (a tighter gap: where R acts the pieces part, and
+  // their boundary there stays open for the bands).
+  StitchOptions so = seam_options(in, false);
+  so.max_gap = 0.3 * in.precision;
+  so.allow_open = true;
+  const TriangleMesh joined = join(pieces, so, st);
+  TriangleMesh out;
+  if (st.stitch.left_open == 0 || acts.empty()) {
+    out = joined;
+    st.self_intersections = intersections_in(out, near.expanded(2.0 * in.precision)).size();
+  } else {
+    // The blended part: the node's surface where R may act, cut to where it does.
+    const Graph* graph = in.graph.get();
+    const NodeId region = c[2];
+    const double margin = 2.0 * in.precision;
+    const TriangleMesh p = patch(in, acts, [graph, region, T, eps, margin](const Aabb& brick) {
+      return field_interval(*graph, region, T, brick.expanded(margin), true).hi >= eps;
+    }, st, true);  // where the region fades out the surface turns into the union's crease
+    const BatchField in_region = [fr, eps](std::span<const glm::dvec3> points, std::span<double> values) {
+      fr(points, values);
+      for (double& v : values) v = eps - v;
+    };
+    const auto field = node_tape(in);
+    TriangleMesh side = pull_back_boundary(cut_mesh(p, in_region, cut_options(in)));
+    relax_boundary(side, *field, T);
+    st.patch_triangles = side.triangles.size();
+    out = close_with_bands({joined}, side, acts, *field, in, st);
+  }
+  if (stats) *stats = st;
+  return out;
+}
+
+}  // namespace ht

@@ -1,0 +1,124 @@
+// Trimmed Booleans (meshers/local_ops.hpp): a left fold of binary steps, each cutting both meshes
+// along the other's surface and welding the two seams into one.
+#include "meshers/local_ops.hpp"
+
+#include "meshers/local_parts.hpp"
+#include "meshers/relax.hpp"
+#include "meshers/warp_mesh.hpp"
+#include "runtime/tape.hpp"
+
+#include <algorithm>
+#include <string>
+#include <vector>
+
+namespace ht {
+
+using namespace local;
+
+namespace {
+
+// An operand of one Boolean step: its mesh, its field, where that field may be non-zero, and the
+// tape that projects the vertices its refinement adds (the operand's own; none for the result of
+// earlier steps, whose refinement splits at midpoints: no single surface is its own).
+struct BooleanOperand {
+  TriangleMesh mesh;
+  BatchField field;
+  Aabb support;
+  std::shared_ptr<const TapeEvaluator> surface;
+};
+
+BatchField shifted(const BatchField& f, double a, double b) {
+  return [f, a, b](std::span<const glm::dvec3> points, std::span<double> values) {
+    f(points, values);
+    for (double& v : values) v = a * v + b;
+  };
+}
+
+// a op b, both trimmed along the other's surface and stitched. The cuts sample the other
+// operand at vertices: a triangle can hide a small excursion of the other surface, and the seams
+// then cross. Where they do, both meshes are refined (edges halved each round) and cut again.
+TriangleMesh boolean_step(const LocalInput& in, NodeKind kind, BooleanOperand& a, BooleanOperand& b,
+                          const TapeEvaluator& node_field, LocalStats& st) {
+  const double T = in.threshold;
+  // Keep A where B does not change it, and B where A does not: outside the other for a union,
+  // inside it for an intersection; a difference keeps A outside B and B inside A, turned over.
+  const bool keep_a_outside = kind != NodeKind::Intersection;
+  const bool keep_b_outside = kind == NodeKind::Union;
+  const Aabb meet = intersect(a.support, b.support), near = meet.expanded(2.0 * in.precision);
+  auto refine = [&](BooleanOperand& o, const Aabb& region, double edge) {
+    o.mesh = warp_mesh(o.mesh, [](const glm::dvec3& p) { return p; }, o.surface.get(), T, edge, nullptr, &region);
+  };
+  double edge = 1.5 * in.precision;
+  refine(a, meet.expanded(in.precision), edge);
+  refine(b, meet.expanded(in.precision), edge);
+  TriangleMesh out;
+  for (int round = 0;; ++round) {
+    std::vector<TriangleMesh> pieces;
+    pieces.push_back(cut_mesh(a.mesh, keep_a_outside ? shifted(b.field, 1, -T) : shifted(b.field, -1, T), cut_options(in)));
+    pieces.push_back(cut_mesh(b.mesh, keep_b_outside ? shifted(a.field, 1, -T) : shifted(a.field, -1, T), cut_options(in)));
+    if (kind == NodeKind::Difference) flip(pieces[1]);
+    st.kept_triangles = count_triangles(pieces);
+    std::vector<std::uint8_t> seam;
+    out = join(pieces, seam_options(in, false), st, &seam);
+    // The seam is the crease: it stays. Only where the operands meet can the result intersect.
+    st.self_intersections = untangle(out, seam, node_field, T, near);
+    if (st.self_intersections == 0 || round == 2) break;
+    Aabb hot;
+    for (const auto& pair : intersections_in(out, near))
+      for (std::uint32_t t : pair)
+        for (int k = 0; k < 3; ++k) hot.grow(out.positions[out.triangles[t][k]]);
+    edge *= 0.5;
+    refine(a, hot.expanded(in.precision), edge);
+    refine(b, hot.expanded(in.precision), edge);
+  }
+  return out;
+}
+
+// The field and support of a op b (min/max: the surface is the same under R-functions).
+void fold_into(BooleanOperand& acc, const BooleanOperand& b, NodeKind kind, double T) {
+  const BatchField fa = acc.field, fb = b.field;
+  acc.field = [fa, fb, kind, T](std::span<const glm::dvec3> points, std::span<double> values) {
+    std::vector<double> other(points.size());
+    fa(points, values);
+    fb(points, other);
+    for (std::size_t k = 0; k < points.size(); ++k)
+      values[k] = kind == NodeKind::Union          ? std::max(values[k], other[k])
+                  : kind == NodeKind::Intersection ? std::min(values[k], other[k])
+                                                   : std::max(0.0, std::min(values[k], 2.0 * T - other[k]));
+  };
+  if (kind == NodeKind::Union) acc.support = merge(acc.support, b.support);
+  if (kind == NodeKind::Intersection) acc.support = intersect(acc.support, b.support);
+}
+
+}  // namespace
+
+TriangleMesh trim_boolean(const LocalInput& in, LocalStats* stats) {
+  LocalStats st;
+  const Graph& g = *in.graph;
+  const auto c = g.children_of(in.node);
+  if (c.size() > kMaxLocalBooleanOperands)
+    throw LocalFailure("a Boolean of " + std::to_string(c.size()) + " operands (local meshing folds at most " +
+                       std::to_string(kMaxLocalBooleanOperands) + ")");
+  const NodeKind kind = g.kind[in.node];
+  const auto node_field = node_tape(in);
+  // A left fold of binary steps, as the format defines the n-ary Booleans.
+  auto operand_of = [&](std::size_t i) {
+    const NodeField f(in, c[i], false);
+    st.operand_triangles += operand(in, i).triangles.size();
+    return BooleanOperand{operand(in, i), [f](std::span<const glm::dvec3> p, std::span<double> v) { f(p, v); }, f.support(),
+                          std::make_shared<const TapeEvaluator>(
+                              std::make_shared<const Tape>(compile_tape(in.graph, c[i], in.threshold)))};
+  };
+  BooleanOperand acc = operand_of(0);
+  for (std::size_t i = 1; i < c.size(); ++i) {
+    BooleanOperand b = operand_of(i);
+    acc.mesh = boolean_step(in, kind, acc, b, *node_field, st);
+    if (st.self_intersections) break;
+    fold_into(acc, b, kind, in.threshold);
+    acc.surface = nullptr;
+  }
+  if (stats) *stats = st;
+  return std::move(acc.mesh);
+}
+
+}  // namespace ht

@@ -1,0 +1,77 @@
+// The pieces the local strategies share (meshers/local_ops.hpp is their public face): fields of
+// operands as batch functions, cut settings, operand refinement, the node's own patch, seam
+// settings and stitching, the band's relaxation. Internal to meshers/local_*.cpp.
+#pragma once
+
+#include "meshers/cut.hpp"
+#include "meshers/local_ops.hpp"
+#include "runtime/tape_eval.hpp"
+
+#include <functional>
+#include <memory>
+#include <vector>
+
+namespace ht::local {
+
+// A node's field at points, exactly 0 outside its support box without running the tape there
+// (most of a large mesh leaf lies outside a small operand's support).
+class NodeField {
+ public:
+  NodeField(const LocalInput& in, NodeId node, bool under_blend)
+      : eval_(std::make_shared<const TapeEvaluator>(
+            std::make_shared<const Tape>(compile_tape(in.graph, node, in.threshold, nullptr, under_blend)))),
+        support_(in.graph->support(node, under_blend)) {}
+
+  void operator()(std::span<const glm::dvec3> points, std::span<double> values) const {
+    std::vector<glm::dvec3> inside;
+    std::vector<std::size_t> where;
+    for (std::size_t i = 0; i < points.size(); ++i) {
+      values[i] = 0.0;
+      if (support_.contains(points[i])) {
+        inside.push_back(points[i]);
+        where.push_back(i);
+      }
+    }
+    std::vector<double> v(inside.size());
+    if (!inside.empty()) eval_->field(inside, v);
+    for (std::size_t k = 0; k < where.size(); ++k) values[where[k]] = v[k];
+  }
+  const Aabb& support() const { return support_; }
+
+ private:
+  std::shared_ptr<const TapeEvaluator> eval_;
+  Aabb support_;
+};
+
+/// Cuts snap vertices by at most a tenth of the precision (see CutOptions::snap_distance).
+CutOptions cut_options(const LocalInput& in);
+/// Child i's mesh; throws LocalFailure when it has none.
+const TriangleMesh& operand(const LocalInput& in, std::size_t i);
+/// The operand's mesh with edges longer than max_edge (default 1.5 h) split inside `region`,
+/// widened by h, new vertices projected onto the child's surface: a coarse mesh's long chords
+/// would otherwise cut a curved seam short. Vertices already there stay bit for bit.
+TriangleMesh refined(const TriangleMesh& mesh, const LocalInput& in, NodeId child, bool under_blend, const Aabb& region,
+                     double max_edge = 0.0);
+/// Turns every triangle over.
+void flip(TriangleMesh& m);
+bool overlaps(const Aabb& a, const Aabb& b);
+/// The node's own surface, polygonized only inside `clip`, in the bricks `wanted` accepts, at
+/// the operands' edge length there (at most 4x finer than h), sharp features only if `sharp`.
+TriangleMesh patch(const LocalInput& in, const Aabb& clip, std::function<bool(const Aabb&)> wanted, LocalStats& st,
+                   bool sharp);
+/// Seams of this node: gaps up to 3/4 of the precision; `onto_earlier` where the pieces meet
+/// smoothly, not at a crease (meshers/stitch.hpp).
+StitchOptions seam_options(const LocalInput& in, bool onto_earlier);
+/// Stitches the non-empty pieces; `seam` as in stitch().
+TriangleMesh join(const std::vector<TriangleMesh>& pieces, const StitchOptions& so, LocalStats& st,
+                  std::vector<std::uint8_t>* seam = nullptr);
+/// The node's own field, where a result's vertices are projected back.
+std::shared_ptr<const TapeEvaluator> node_tape(const LocalInput& in);
+/// The operands' pieces as one mesh, in the order bridge() lays them out.
+TriangleMesh join_operands(const std::vector<const TriangleMesh*>& ops);
+/// Evens out a band: the patch's vertices along it (those from `first_patch` on that share a
+/// triangle with an operand's) and one ring behind them relax, projected onto the node's surface.
+void relax_band(TriangleMesh& m, std::uint32_t first_patch, const TapeEvaluator& field, double T);
+std::size_t count_triangles(const std::vector<TriangleMesh>& pieces);
+
+}  // namespace ht::local
