@@ -1,7 +1,9 @@
 #include "meshers/caps.hpp"
 
 #include "meshers/bridge.hpp"
+#include "nodes/trimesh.hpp"
 
+#include <glm/geometric.hpp>
 #include <glm/vec2.hpp>
 #include <tbb/parallel_for.h>
 
@@ -127,9 +129,160 @@ std::size_t delaunay_flips(const std::vector<glm::dvec2>& q, std::vector<std::ar
   return flips;
 }
 
+// Remeshes a cap's interior to edges of about `target` (Botsch & Kobbelt's isotropic remeshing,
+// in the cap's plane): split edges longer than 4/3 target, collapse those shorter than 4/5 into
+// an interior end, flip to Delaunay, move interior vertices to their neighbours' centroid. The
+// boundary (shared with the cut mesh) never changes. Halfedge work on an OpenMesh mesh of the
+// cap, with its is_collapse_ok / is_flip_ok checks. Points are appended to q; t is replaced.
+class CapRemesher {
+ public:
+  CapRemesher(const std::vector<glm::dvec2>& q, const std::vector<std::array<std::uint32_t, 3>>& t) {
+    m_.request_vertex_status();  // collapse and garbage collection mark and sweep
+    m_.request_edge_status();
+    m_.request_halfedge_status();
+    m_.request_face_status();
+    for (const glm::dvec2& p : q) m_.add_vertex(TriMesh::Point(p.x, p.y, 0.0));
+    for (const auto& tri : t)
+      m_.add_face(TriMesh::VertexHandle(int(tri[0])), TriMesh::VertexHandle(int(tri[1])), TriMesh::VertexHandle(int(tri[2])));
+    ok_ = m_.n_faces() == t.size();
+    boundary_count_ = q.size();
+  }
+  bool ok() const { return ok_; }
+
+  std::size_t run(double target) {
+    for (int it = 0; it < 6; ++it) {
+      split(4.0 / 3.0 * target);
+      collapse(0.8 * target, 4.0 / 3.0 * target);
+      delaunay();
+      relax();
+    }
+    delaunay();
+    return flips_;
+  }
+
+  void result(std::vector<glm::dvec2>& q, std::vector<std::array<std::uint32_t, 3>>& t) {
+    m_.garbage_collection();
+    q.clear();
+    for (const auto v : m_.vertices()) q.push_back(xy(v));
+    t.clear();
+    for (const auto f : m_.faces()) {
+      std::array<std::uint32_t, 3> tri;
+      int k = 0;
+      for (const auto v : m_.fv_range(f)) tri[std::size_t(k++)] = std::uint32_t(v.idx());
+      t.push_back(tri);
+    }
+  }
+
+ private:
+  glm::dvec2 xy(TriMesh::VertexHandle v) const { return {m_.point(v)[0], m_.point(v)[1]}; }
+
+  void split(double longer) {
+    std::vector<TriMesh::EdgeHandle> todo;
+    for (const auto e : m_.edges())
+      if (!m_.is_boundary(e) && m_.calc_edge_length(e) > longer) todo.push_back(e);
+    for (const auto e : todo)
+      if (!m_.status(e).deleted() && m_.calc_edge_length(e) > longer) m_.split_edge(e, m_.add_vertex(m_.calc_edge_midpoint(e)));
+  }
+
+  void collapse(double shorter, double longer) {
+    for (const auto e : m_.edges()) {
+      if (m_.status(e).deleted() || m_.calc_edge_length(e) >= shorter) continue;
+      for (int side = 0; side < 2; ++side) {
+        const auto h = m_.halfedge_handle(e, side);  // collapse from -> to
+        const auto from = m_.from_vertex_handle(h), to = m_.to_vertex_handle(h);
+        if (m_.is_boundary(from) || !m_.is_collapse_ok(h)) continue;
+        bool too_long = false;
+        for (const auto w : m_.vv_range(from)) too_long |= glm::length(xy(w) - xy(to)) > longer;
+        if (too_long || !keeps_orientation(from, to)) continue;
+        m_.collapse(h);
+        break;
+      }
+    }
+  }
+
+  // Moving `from` onto `to` must not turn any surviving triangle around `from` over.
+  bool keeps_orientation(TriMesh::VertexHandle from, TriMesh::VertexHandle to) const {
+    for (const auto f : m_.vf_range(from)) {
+      glm::dvec2 p[3];
+      int k = 0;
+      bool gone = false;
+      for (const auto v : m_.fv_range(f)) {
+        gone |= v == to;
+        p[k++] = v == from ? xy(to) : xy(v);
+      }
+      if (!gone && cross2(p[0], p[1], p[2]) <= 0) return false;
+    }
+    return true;
+  }
+
+  double opposite_angles(TriMesh::EdgeHandle e) const {
+    double sum = 0;
+    for (int side = 0; side < 2; ++side) {
+      const auto h = m_.halfedge_handle(e, side);
+      const auto o = m_.to_vertex_handle(m_.next_halfedge_handle(h));
+      const glm::dvec2 u = xy(m_.from_vertex_handle(h)) - xy(o), v = xy(m_.to_vertex_handle(h)) - xy(o);
+      sum += std::abs(std::atan2(u.x * v.y - u.y * v.x, u.x * v.x + u.y * v.y));
+    }
+    return sum;
+  }
+
+  void delaunay() {
+    for (int round = 0; round < 16; ++round) {
+      std::size_t done = 0;
+      for (const auto e : m_.edges()) {
+        if (m_.status(e).deleted() || m_.is_boundary(e) || opposite_angles(e) <= 3.14159265358979 + 1e-9 || !m_.is_flip_ok(e))
+          continue;
+        const auto h = m_.halfedge_handle(e, 0);
+        const auto a = m_.from_vertex_handle(h), b = m_.to_vertex_handle(h);
+        const auto r = m_.to_vertex_handle(m_.next_halfedge_handle(h));
+        const auto s = m_.to_vertex_handle(m_.next_halfedge_handle(m_.opposite_halfedge_handle(h)));
+        if (cross2(xy(r), xy(s), xy(b)) <= 0 || cross2(xy(s), xy(r), xy(a)) <= 0) continue;  // not a convex quad
+        m_.flip(e);
+        ++done;
+      }
+      flips_ += done;
+      if (done == 0) break;
+    }
+  }
+
+  void relax() {
+    std::vector<std::pair<TriMesh::VertexHandle, glm::dvec2>> moves;
+    for (const auto v : m_.vertices()) {
+      if (m_.status(v).deleted() || m_.is_boundary(v)) continue;
+      glm::dvec2 c(0.0);
+      int n = 0;
+      for (const auto w : m_.vv_range(v)) c += xy(w), ++n;
+      if (n) moves.push_back({v, c / double(n)});
+    }
+    for (const auto& [v, c] : moves) {
+      const glm::dvec2 old = xy(v);
+      m_.set_point(v, TriMesh::Point(c.x, c.y, 0.0));
+      bool flipped = false;  // a move that turns a triangle over is undone
+      for (const auto f : m_.vf_range(v)) {
+        glm::dvec2 p[3];
+        int k = 0;
+        for (const auto w : m_.fv_range(f)) p[k++] = xy(w);
+        flipped |= cross2(p[0], p[1], p[2]) <= 0;
+      }
+      if (flipped) m_.set_point(v, TriMesh::Point(old.x, old.y, 0.0));
+    }
+  }
+
+  TriMesh m_;
+  bool ok_ = false;
+  std::size_t boundary_count_ = 0, flips_ = 0;
+};
+
+void refine(std::vector<glm::dvec2>& q, std::vector<std::array<std::uint32_t, 3>>& t, double max_edge, std::size_t& flips) {
+  CapRemesher r(q, t);
+  if (!r.ok()) return;  // not a manifold OpenMesh takes: keep the plain triangulation
+  flips += r.run(max_edge / 1.5);
+  r.result(q, t);
+}
+
 }  // namespace
 
-void cap_box_openings(TriangleMesh& mesh, const Aabb& box, double tol, CapStats* stats) {
+void cap_box_openings(TriangleMesh& mesh, const Aabb& box, double tol, double max_edge, CapStats* stats) {
   CapStats st;
   const auto loops = boundary_loops(mesh);
   struct Ring {
@@ -160,10 +313,22 @@ void cap_box_openings(TriangleMesh& mesh, const Aabb& box, double tol, CapStats*
   tbb::parallel_for(std::size_t(0), rings.size(), [&](std::size_t i) {
     tris[i] = ear_clip(rings[i].q);
     flips[i] = delaunay_flips(rings[i].q, tris[i]);
+    if (max_edge > 0) refine(rings[i].q, tris[i], max_edge, flips[i]);
   });
   for (std::size_t i = 0; i < rings.size(); ++i) {
+    Ring& r = rings[i];
+    // Points the refinement added become vertices in the face's plane.
+    for (std::size_t k = r.vertices.size(); k < r.q.size(); ++k) {
+      glm::dvec3 p;
+      const int u = (r.face.axis + 1) % 3, w = (r.face.axis + 2) % 3;
+      p[r.face.axis] = r.face.value;
+      p[r.face.hi ? u : w] = r.q[k].x;
+      p[r.face.hi ? w : u] = r.q[k].y;
+      r.vertices.push_back(std::uint32_t(mesh.positions.size()));
+      mesh.positions.push_back(p);
+    }
     for (const auto& t : tris[i])
-      mesh.triangles.push_back({rings[i].vertices[t[0]], rings[i].vertices[t[1]], rings[i].vertices[t[2]]});
+      mesh.triangles.push_back({r.vertices[t[0]], r.vertices[t[1]], r.vertices[t[2]]});
     st.triangles += tris[i].size();
     st.flips += flips[i];
     ++st.loops;

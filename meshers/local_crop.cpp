@@ -36,7 +36,7 @@ TriangleMesh trim_crop(const LocalInput& in, LocalStats* stats) {
     out = cut_mesh(out, plane, cut_options(in));
     CapStats caps;
     try {
-      cap_box_openings(out, box, 1e-6 * std::max(1.0, glm::length(box.size())), &caps);
+      cap_box_openings(out, box, 1e-6 * std::max(1.0, glm::length(box.size())), 1.5 * in.precision, &caps);
     } catch (const CapError& e) {
       throw LocalFailure(e.what());
     }
