@@ -5,6 +5,7 @@
 #include "meshers/local_parts.hpp"
 #include "meshers/bridge.hpp"
 #include "meshers/relax.hpp"
+#include "meshers/remesh.hpp"
 #include "runtime/tape.hpp"
 
 #include <algorithm>
@@ -107,11 +108,29 @@ TriangleMesh close_with_bands(const std::vector<TriangleMesh>& pieces, const Tri
   std::uint32_t first_patch = 0;
   TriangleMesh out = bridge(ops, side, 8.0 * in.precision, &st.bridge, &first_patch);
   relax_band(out, first_patch, field, in.threshold);
-  // The operands' trimmed edges stay; everything else may move to undo a fold.
-  std::vector<std::uint8_t> fixed(out.positions.size(), 0);
-  for (const auto& loop : boundary_loops(join_operands(ops)))
-    for (std::uint32_t v : loop) fixed[v] = 1;
-  st.self_intersections = untangle(out, fixed, field, in.threshold, clip);
+  Aabb changed;
+  if (in.remesh_seams) {
+    // The patch, its bands and two rings of the operands beside them are remeshed: the bands'
+    // and the patch's slivers go. The rest of the operands stays.
+    std::vector<std::uint8_t> region(out.positions.size(), 0), band(out.positions.size(), 0), ops_only(out.positions.size(), 0);
+    for (std::size_t v = first_patch; v < out.positions.size(); ++v) region[v] = 1;
+    for (const glm::uvec3& t : out.triangles) {
+      const bool mixed = std::min({t[0], t[1], t[2]}) < first_patch && std::max({t[0], t[1], t[2]}) >= first_patch;
+      if (mixed)
+        for (int k = 0; k < 3; ++k) band[t[k]] = 1;
+    }
+    for (std::size_t v = 0; v < first_patch; ++v) ops_only[v] = 1;
+    const std::vector<std::uint8_t> near = rings_around(out, band, ops_only, 2);
+    for (std::size_t v = 0; v < out.positions.size(); ++v) region[v] = region[v] || band[v] || near[v];
+    RemeshOptions ro;  // at the operands' own edge length there, as the patch was made
+    ro.target = st.patch_precision > 0 ? st.patch_precision : in.precision;
+    for (std::size_t v = 0; v < out.positions.size(); ++v)
+      if (region[v]) changed.grow(out.positions[v]);
+    remesh_region(out, region, std::vector<std::uint8_t>(out.positions.size(), 0), field, in.threshold, ro, &st.remesh);
+  }
+  // Look for intersections wherever the strategy or the remeshing changed the mesh.
+  changed = merge(changed.expanded(in.precision), clip);
+  st.self_intersections = untangle(out, std::vector<std::uint8_t>(out.positions.size(), 0), field, in.threshold, changed);
   return out;
 }
 

@@ -21,6 +21,7 @@
 
 #include "meshers/bridge.hpp"
 #include "meshers/polygonize.hpp"
+#include "meshers/remesh.hpp"
 #include "meshers/stitch.hpp"
 #include "meshers/triangle_mesh.hpp"
 #include "runtime/graph.hpp"
@@ -44,6 +45,8 @@ struct LocalInput {
   double precision = 0.0;
   std::span<const std::shared_ptr<const TriangleMesh>> child_meshes;
   PolygonizeOptions polygonize;  ///< precision, brick_filter and progress are set by the strategy
+  /// Remesh what a strategy made (patches, bands) to the precision (meshers/remesh.hpp).
+  bool remesh_seams = true;
 };
 
 struct LocalStats {
@@ -51,12 +54,14 @@ struct LocalStats {
   std::size_t kept_triangles = 0;     ///< of those, kept (whole or clipped)
   std::size_t patch_triangles = 0;    ///< new surface from the polygonizer, after its cut
   bool patched = false;               ///< the polygonizer ran on part of the node
+  double patch_precision = 0;         ///< its cell size: the operands' own edge length there
   PolygonizeStats patch;
   /// Self-intersecting triangle pairs left where the strategy changed the mesh (the plan
   /// rejects a result with any).
   std::size_t self_intersections = 0;
   StitchStats stitch;                 ///< Booleans: the exact seams
   BridgeStats bridge;                 ///< blends: the bands between operands and patch
+  RemeshStats remesh;                 ///< blends: the remeshing of patch and bands
 };
 
 /// The paper's overlap ratio of a blend: rho = V(B_A and B_B) / V(B_A or B_B) of the operands'

@@ -70,6 +70,7 @@ TriangleMesh patch(const LocalInput& in, const Aabb& clip, std::function<bool(co
   PolygonizeOptions o = in.polygonize;
   o.sharp_features = o.sharp_features && sharp;
   o.precision = patch_precision(in, clip);
+  st.patch_precision = o.precision;
   o.clip = clip;
   o.brick_filter = std::move(wanted);
   o.progress = {};

@@ -1,0 +1,290 @@
+#include "meshers/remesh.hpp"
+
+#include "nodes/trimesh.hpp"
+#include "runtime/tape_eval.hpp"
+
+#include <glm/geometric.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+namespace ht {
+namespace {
+
+constexpr double kCreaseCos = 0.8660254037844387;  // cos 30 degrees
+
+glm::dvec3 g(const TriMesh::Point& p) { return {p[0], p[1], p[2]}; }
+TriMesh::Point om(const glm::dvec3& p) { return {p.x, p.y, p.z}; }
+
+class Remesher {
+ public:
+  // `sub` holds the triangles being remeshed; origin[v] is each vertex's index in the whole
+  // mesh; locked[v] those that must stay (outside the region, fixed, or on the rim).
+  Remesher(const TriangleMesh& sub, const std::vector<std::uint32_t>& origin, const std::vector<std::uint8_t>& locked,
+           const TapeEvaluator& field, double T, double target)
+      : field_(field), T_(T), L_(target) {
+    m_.request_vertex_status();
+    m_.request_edge_status();
+    m_.request_halfedge_status();
+    m_.request_face_status();
+    m_.add_property(locked_);
+    m_.add_property(origin_);
+    for (std::size_t v = 0; v < sub.positions.size(); ++v) {
+      const auto h = m_.add_vertex(om(sub.positions[v]));
+      m_.property(locked_, h) = locked[v] != 0;
+      m_.property(origin_, h) = origin[v];
+    }
+    for (const glm::uvec3& t : sub.triangles)
+      m_.add_face(TriMesh::VertexHandle(int(t[0])), TriMesh::VertexHandle(int(t[1])), TriMesh::VertexHandle(int(t[2])));
+    ok_ = m_.n_faces() == sub.triangles.size();
+    // Creases stay: both ends of an edge whose triangles meet at more than 30 degrees are locked.
+    if (ok_)
+      for (const auto e : m_.edges()) {
+        if (m_.is_boundary(e)) continue;
+        const auto h = m_.halfedge_handle(e, 0);
+        if (glm::dot(normal(m_.face_handle(h)), normal(m_.face_handle(m_.opposite_halfedge_handle(h)))) < kCreaseCos) {
+          m_.property(locked_, m_.from_vertex_handle(h)) = true;
+          m_.property(locked_, m_.to_vertex_handle(h)) = true;
+        }
+      }
+  }
+  bool ok() const { return ok_; }
+
+  void run(int iterations, RemeshStats& st) {
+    for (int it = 0; it < iterations; ++it) {
+      st.splits += split();
+      st.collapses += collapse();
+      st.flips += flip();
+      relax();
+    }
+  }
+
+  // The remeshed triangles in the whole mesh's numbering: surviving vertices keep their index
+  // (and position), new ones are appended to `positions`.
+  void result(std::vector<glm::dvec3>& positions, std::vector<glm::uvec3>& triangles) {
+    m_.garbage_collection();
+    std::vector<std::uint32_t> index(m_.n_vertices());
+    for (const auto v : m_.vertices()) {
+      std::uint32_t o = m_.property(origin_, v);
+      if (o == ~0u) {
+        o = std::uint32_t(positions.size());
+        positions.push_back(g(m_.point(v)));
+      } else {
+        positions[o] = g(m_.point(v));
+      }
+      index[std::size_t(v.idx())] = o;
+    }
+    for (const auto f : m_.faces()) {
+      glm::uvec3 t;
+      int k = 0;
+      for (const auto v : m_.fv_range(f)) t[k++] = index[std::size_t(v.idx())];
+      triangles.push_back(t);
+    }
+  }
+
+ private:
+  bool locked(TriMesh::VertexHandle v) const { return m_.property(locked_, v); }
+  bool frozen(TriMesh::EdgeHandle e) const {
+    const auto h = m_.halfedge_handle(e, 0);
+    return locked(m_.from_vertex_handle(h)) && locked(m_.to_vertex_handle(h));
+  }
+  glm::dvec3 normal(TriMesh::FaceHandle f) const {
+    const auto n = m_.calc_face_normal(f);
+    return {n[0], n[1], n[2]};
+  }
+
+  void project(std::vector<glm::dvec3>& at) const {
+    std::vector<glm::dvec3> grad(at.size());
+    std::vector<double> value(at.size());
+    for (int s = 0; s < 2 && !at.empty(); ++s) {
+      field_.gradient(at, value, grad);
+      for (std::size_t i = 0; i < at.size(); ++i) {
+        const double g2 = glm::dot(grad[i], grad[i]);
+        if (g2 > 0 && std::isfinite(g2)) at[i] -= (value[i] - T_) / g2 * grad[i];
+      }
+    }
+  }
+
+  std::size_t split() {
+    struct Todo {
+      TriMesh::EdgeHandle e;
+      TriMesh::VertexHandle a, b;
+    };
+    std::vector<Todo> todo;
+    std::vector<glm::dvec3> mids;
+    for (const auto e : m_.edges()) {
+      if (m_.status(e).deleted() || frozen(e) || m_.calc_edge_length(e) <= 4.0 / 3.0 * L_) continue;
+      const auto h = m_.halfedge_handle(e, 0);
+      todo.push_back({e, m_.from_vertex_handle(h), m_.to_vertex_handle(h)});
+      mids.push_back(g(m_.calc_edge_midpoint(e)));
+    }
+    project(mids);
+    std::size_t done = 0;
+    for (std::size_t i = 0; i < todo.size(); ++i) {
+      const auto h = m_.halfedge_handle(todo[i].e, 0);
+      if (m_.from_vertex_handle(h) != todo[i].a || m_.to_vertex_handle(h) != todo[i].b) continue;
+      const auto v = m_.add_vertex(om(mids[i]));
+      m_.property(locked_, v) = false;
+      m_.property(origin_, v) = ~0u;
+      m_.split_edge(todo[i].e, v);
+      ++done;
+    }
+    return done;
+  }
+
+  // Moving `from` onto `to` keeps every surviving triangle around `from` facing as it did.
+  bool keeps_faces(TriMesh::VertexHandle from, TriMesh::VertexHandle to) {
+    const auto saved = m_.point(from);
+    std::vector<std::pair<TriMesh::FaceHandle, glm::dvec3>> before;
+    for (const auto f : m_.vf_range(from)) before.push_back({f, normal(f)});
+    m_.set_point(from, m_.point(to));
+    bool good = true;
+    for (const auto& [f, n] : before) {
+      bool gone = false;
+      for (const auto v : m_.fv_range(f)) gone |= v == to;
+      if (!gone && glm::dot(normal(f), n) < 0.5) good = false;
+    }
+    m_.set_point(from, saved);
+    return good;
+  }
+
+  std::size_t collapse() {
+    std::size_t done = 0;
+    for (const auto e : m_.edges()) {
+      if (m_.status(e).deleted() || m_.calc_edge_length(e) >= 0.8 * L_) continue;
+      for (int side = 0; side < 2; ++side) {
+        const auto h = m_.halfedge_handle(e, side);
+        const auto from = m_.from_vertex_handle(h), to = m_.to_vertex_handle(h);
+        if (locked(from) || !m_.is_collapse_ok(h)) continue;
+        bool too_long = false;
+        for (const auto w : m_.vv_range(from)) too_long |= glm::length(g(m_.point(w)) - g(m_.point(to))) > 4.0 / 3.0 * L_;
+        if (too_long || !keeps_faces(from, to)) continue;
+        m_.collapse(h);
+        ++done;
+        break;
+      }
+    }
+    return done;
+  }
+
+  std::size_t flip() {
+    std::size_t done = 0;
+    for (const auto e : m_.edges()) {
+      if (m_.status(e).deleted() || m_.is_boundary(e) || frozen(e) || !m_.is_flip_ok(e)) continue;
+      const auto h = m_.halfedge_handle(e, 0), o = m_.opposite_halfedge_handle(h);
+      const auto a = m_.from_vertex_handle(h), b = m_.to_vertex_handle(h);
+      const auto c = m_.to_vertex_handle(m_.next_halfedge_handle(h)), d = m_.to_vertex_handle(m_.next_halfedge_handle(o));
+      const glm::dvec3 n1 = normal(m_.face_handle(h)), n2 = normal(m_.face_handle(o));
+      if (glm::dot(n1, n2) < 0.95) continue;  // a crease or a tight bend: keep its edge
+      auto dev = [&](TriMesh::VertexHandle v, int delta) {
+        const int x = int(m_.valence(v)) + delta - 6;
+        return x * x;
+      };
+      const int before = dev(a, 0) + dev(b, 0) + dev(c, 0) + dev(d, 0);
+      const int after = dev(a, -1) + dev(b, -1) + dev(c, 1) + dev(d, 1);
+      if (after >= before) continue;
+      // The two new triangles must face as the old ones did.
+      const glm::dvec3 pa = g(m_.point(a)), pb = g(m_.point(b)), pc = g(m_.point(c)), pd = g(m_.point(d));
+      const glm::dvec3 up = n1 + n2;
+      if (glm::dot(glm::cross(pd - pc, pa - pc), up) <= 0 || glm::dot(glm::cross(pc - pd, pb - pd), up) <= 0) continue;
+      m_.flip(e);
+      ++done;
+    }
+    return done;
+  }
+
+  void relax() {
+    std::vector<TriMesh::VertexHandle> moving;
+    std::vector<glm::dvec3> at;
+    for (const auto v : m_.vertices()) {
+      if (m_.status(v).deleted() || locked(v)) continue;
+      glm::dvec3 c(0.0), n(0.0);
+      int k = 0;
+      for (const auto w : m_.vv_range(v)) c += g(m_.point(w)), ++k;
+      for (const auto f : m_.vf_range(v)) n += normal(f);
+      if (k == 0 || glm::length(n) == 0) continue;
+      n = glm::normalize(n);
+      const glm::dvec3 p = g(m_.point(v)), d = c / double(k) - p;
+      moving.push_back(v);
+      at.push_back(p + d - glm::dot(d, n) * n);
+    }
+    project(at);
+    for (std::size_t i = 0; i < moving.size(); ++i) {
+      const auto v = moving[i];
+      const auto saved = m_.point(v);
+      std::vector<glm::dvec3> before;
+      for (const auto f : m_.vf_range(v)) before.push_back(normal(f));
+      m_.set_point(v, om(at[i]));
+      std::size_t k = 0;
+      bool good = true;
+      for (const auto f : m_.vf_range(v)) good &= glm::dot(normal(f), before[k++]) > 0.5;
+      if (!good) m_.set_point(v, saved);
+    }
+  }
+
+  TriMesh m_;
+  OpenMesh::VPropHandleT<bool> locked_;
+  OpenMesh::VPropHandleT<std::uint32_t> origin_;
+  const TapeEvaluator& field_;
+  double T_, L_;
+  bool ok_ = false;
+};
+
+}  // namespace
+
+void remesh_region(TriangleMesh& mesh, std::span<const std::uint8_t> region, std::span<const std::uint8_t> fixed,
+                   const TapeEvaluator& field, double threshold, const RemeshOptions& options, RemeshStats* stats) {
+  RemeshStats st;
+  // Only the triangles with a corner in the region go to OpenMesh; a vertex that any other
+  // triangle uses is on the rim and stays.
+  const std::size_t nv = mesh.positions.size();
+  std::vector<std::uint8_t> in_sub(mesh.triangles.size(), 0), rim(nv, 0);
+  for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+    const glm::uvec3 tri = mesh.triangles[t];
+    in_sub[t] = region[tri[0]] || region[tri[1]] || region[tri[2]];
+    if (!in_sub[t]) rim[tri[0]] = rim[tri[1]] = rim[tri[2]] = 1;
+  }
+  TriangleMesh sub;
+  std::vector<std::uint32_t> local(nv, ~0u), origin;
+  std::vector<std::uint8_t> locked;
+  std::vector<glm::uvec3> kept;
+  for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+    const glm::uvec3 tri = mesh.triangles[t];
+    if (!in_sub[t]) {
+      kept.push_back(tri);
+      continue;
+    }
+    glm::uvec3 lt;
+    for (int k = 0; k < 3; ++k) {
+      const std::uint32_t v = tri[k];
+      if (local[v] == ~0u) {
+        local[v] = std::uint32_t(sub.positions.size());
+        sub.positions.push_back(mesh.positions[v]);
+        origin.push_back(v);
+        locked.push_back(!region[v] || fixed[v] || rim[v]);
+      }
+      lt[k] = local[v];
+    }
+    sub.triangles.push_back(lt);
+  }
+  Remesher r(sub, origin, locked, field, threshold, options.target);
+  if (r.ok() && !sub.triangles.empty()) {
+    r.run(options.iterations, st);
+    std::vector<glm::dvec3> positions = mesh.positions;
+    r.result(positions, kept);
+    // Vertices collapsed away leave unused slots: compact, keeping the order.
+    std::vector<std::uint32_t> index(positions.size(), ~0u);
+    for (const glm::uvec3& t : kept)
+      for (int k = 0; k < 3; ++k) index[t[k]] = 0;
+    TriangleMesh out;
+    for (std::uint32_t v = 0; v < positions.size(); ++v)
+      if (index[v] != ~0u) index[v] = std::uint32_t(out.positions.size()), out.positions.push_back(positions[v]);
+    out.triangles.reserve(kept.size());
+    for (const glm::uvec3& t : kept) out.triangles.push_back({index[t[0]], index[t[1]], index[t[2]]});
+    mesh = std::move(out);
+  }
+  if (stats) *stats = st;
+}
+
+}  // namespace ht

@@ -1,0 +1,38 @@
+// Isotropic remeshing of a region of a mesh on its implicit surface (Botsch & Kobbelt 2004), on
+// an OpenMesh halfedge mesh with its validity checks: split edges longer than 4/3 of the target
+// (the new vertex projected onto {f = T} by Newton steps on the tape), collapse edges shorter
+// than 4/5 (is_collapse_ok, and no triangle turned over), flip edges toward valence 6 where the
+// two triangles are nearly coplanar (is_flip_ok), and relax vertices tangentially, projected
+// back onto the surface. The local strategies run it where they made new triangles: their seams,
+// fans and bands, whose slivers it removes.
+//
+// What stays: every vertex outside the region, every `fixed` vertex (exact seams), every vertex on
+// a crease (an edge whose triangles meet at more than 30 degrees), and every edge between two of
+// those. The region's boundary therefore does not move, and
+// vertices outside it keep their positions bit for bit (their indices may change).
+#pragma once
+
+#include "meshers/triangle_mesh.hpp"
+
+#include <cstdint>
+#include <span>
+
+namespace ht {
+
+class TapeEvaluator;
+
+struct RemeshOptions {
+  double target = 0.0;  ///< edge length aimed at (world units); > 0
+  int iterations = 4;
+};
+
+struct RemeshStats {
+  std::size_t splits = 0, collapses = 0, flips = 0;
+};
+
+/// Remeshes the triangles with a corner in `region` (one flag per vertex); `fixed` vertices do
+/// not move. Deterministic. The caller checks the result.
+void remesh_region(TriangleMesh& mesh, std::span<const std::uint8_t> region, std::span<const std::uint8_t> fixed,
+                   const TapeEvaluator& field, double threshold, const RemeshOptions& options, RemeshStats* stats = nullptr);
+
+}  // namespace ht
