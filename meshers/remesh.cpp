@@ -1,5 +1,6 @@
 #include "meshers/remesh.hpp"
 
+#include "meshers/edges.hpp"
 #include "nodes/trimesh.hpp"
 #include "runtime/tape_eval.hpp"
 
@@ -231,6 +232,27 @@ class Remesher {
   bool ok_ = false;
 };
 
+// The triangles taken must form a manifold OpenMesh accepts: where their boundary touches
+// itself at a vertex (two fans of that vertex taken, not the ones between), the whole fan of that
+// vertex is taken too, until no such vertex is left.
+void widen_past_pinches(const TriangleMesh& mesh, std::vector<std::uint8_t>& in_sub) {
+  for (int round = 0; round < 8; ++round) {
+    TriangleMesh taken;
+    taken.positions.resize(mesh.positions.size());
+    std::vector<std::uint32_t> source;
+    for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t)
+      if (in_sub[t]) taken.triangles.push_back(mesh.triangles[t]), source.push_back(t);
+    std::vector<std::uint8_t> out(mesh.positions.size(), 0), pinch(mesh.positions.size(), 0);
+    bool any = false;
+    for (const BoundaryEdge& e : boundary_edges(taken))
+      if (++out[e.from] == 2) pinch[e.from] = 1, any = true;
+    if (!any) return;
+    for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
+      for (int k = 0; k < 3; ++k)
+        if (pinch[mesh.triangles[t][k]]) in_sub[t] = 1;
+  }
+}
+
 }  // namespace
 
 void remesh_region(TriangleMesh& mesh, std::span<const std::uint8_t> region, std::span<const std::uint8_t> fixed,
@@ -243,8 +265,10 @@ void remesh_region(TriangleMesh& mesh, std::span<const std::uint8_t> region, std
   for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
     const glm::uvec3 tri = mesh.triangles[t];
     in_sub[t] = region[tri[0]] || region[tri[1]] || region[tri[2]];
-    if (!in_sub[t]) rim[tri[0]] = rim[tri[1]] = rim[tri[2]] = 1;
   }
+  widen_past_pinches(mesh, in_sub);
+  for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
+    if (!in_sub[t]) rim[mesh.triangles[t][0]] = rim[mesh.triangles[t][1]] = rim[mesh.triangles[t][2]] = 1;
   TriangleMesh sub;
   std::vector<std::uint32_t> local(nv, ~0u), origin;
   std::vector<std::uint8_t> locked;
