@@ -329,6 +329,7 @@ std::shared_ptr<const TriangleMesh> Runner::trim(const Job& job, const std::shar
   in.child_meshes = children;
   in.polygonize = o_.polygonize;
   in.polygonize.cancel = o_.cancel;
+  in.remesh_seams = o_.remesh_seams;
   std::string cause;
   try {
     TriangleMesh m = job.strategy == JobStrategy::TrimBlend     ? trim_blend(in, &r.local)

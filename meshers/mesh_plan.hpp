@@ -85,6 +85,8 @@ struct MeshOptions {
   /// Polled between jobs and inside the polygonizer; when it reads true the run throws
   /// MeshCancelled (meshers/polygonize.hpp).
   const std::atomic<bool>* cancel = nullptr;
+  /// Remesh what the local strategies make (blend patches and bands, meshers/remesh.hpp).
+  bool remesh_seams = true;
 };
 
 struct MeshResult {
@@ -95,7 +97,8 @@ struct MeshResult {
 };
 
 /// Meshes the tree's root. Throws PolygonizeError (a refused precision, an unbounded solid, an
-/// empty ffd child), MeshCancelled, CompileError.
+/// empty ffd child), MeshCancelled, CompileError. Calls on one Tree from several threads are
+/// independent (each run compiles its own tapes; the tree is only read).
 MeshResult mesh_tree(const Tree& tree, const MeshOptions& options);
 
 /// Runs only the jobs that the tree's field needs (its ffd nodes and what they deform) and
