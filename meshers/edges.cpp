@@ -21,14 +21,20 @@ std::vector<BoundaryEdge> boundary_edges(const TriangleMesh& mesh) {
       bucket[fill[std::min(a, b)]++] = {std::max(a, b), 3 * t + std::uint32_t(k)};
     }
   std::vector<BoundaryEdge> out;
-  for (std::size_t v = 0; v < nv; ++v)
-    for (std::uint32_t i = begin[v]; i < begin[v + 1]; ++i) {
-      int uses = 0;
-      for (std::uint32_t j = begin[v]; j < begin[v + 1]; ++j) uses += bucket[j].hi == bucket[i].hi;
-      if (uses != 1) continue;
-      const std::uint32_t slot = bucket[i].slot, t = slot / 3, k = slot % 3;
-      out.push_back({mesh.triangles[t][k], mesh.triangles[t][(k + 1) % 3], slot});
+  for (std::size_t v = 0; v < nv; ++v) {
+    // A bucket holds a vertex's edges to higher vertices: sorted, an edge used once is a run of one.
+    const auto first = bucket.begin() + begin[v], last = bucket.begin() + begin[v + 1];
+    std::sort(first, last, [](const Entry& x, const Entry& y) { return x.hi != y.hi ? x.hi < y.hi : x.slot < y.slot; });
+    for (auto it = first; it != last;) {
+      auto run = it;
+      while (run != last && run->hi == it->hi) ++run;
+      if (run - it == 1) {
+        const std::uint32_t slot = it->slot, t = slot / 3, k = slot % 3;
+        out.push_back({mesh.triangles[t][k], mesh.triangles[t][(k + 1) % 3], slot});
+      }
+      it = run;
     }
+  }
   return out;
 }
 

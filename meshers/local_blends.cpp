@@ -44,7 +44,7 @@ class BlendFields {
   }
   /// g_i - eps for operand i; eps - min_i g_i for i == size() (the patch's cut).
   BatchField cut(std::size_t i) const {
-    return [this, i](std::span<const glm::dvec3> points, std::span<double> values) {
+    return [fields = fields, eps = eps, i](std::span<const glm::dvec3> points, std::span<double> values) {
       const std::size_t n = points.size();
       std::vector<double> total(n, 0.0), largest(n, 0.0), own(n, 0.0), f(n);
       for (std::size_t j = 0; j < fields.size(); ++j) {

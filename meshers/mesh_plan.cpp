@@ -159,6 +159,9 @@ double since(std::chrono::steady_clock::time_point t0) {
 // Why a local result cannot be returned, or empty when it can. The strategy has looked for
 // self-intersections where it changed the mesh (LocalStats::self_intersections).
 std::string local_defect(const TriangleMesh& m, const LocalStats& local) {
+  // Operands lying on each other's surfaces (a subtree used twice in a union) cut each other
+  // away entirely; the global polygonizer tells a truly empty result from that.
+  if (m.triangles.empty() && local.operand_triangles > 0) return "no triangles from non-empty operands";
   MeshChecks c = check_mesh(m, false);
   c.self_intersecting_pairs = local.self_intersections;
   std::string why;
@@ -179,12 +182,19 @@ class Runner {
  public:
   Runner(const Tree& tree, const MeshOptions& o, std::vector<Job> jobs)
       : tree_(tree), o_(o), graph_(tree.graph_ptr()), jobs_(std::move(jobs)), meshes_(jobs_.size()),
-        reports_(jobs_.size()), errors_(jobs_.size()) {}
+        reports_(jobs_.size()), errors_(jobs_.size()), leaves_(jobs_.size()) {}
 
   void run_all();
   std::shared_ptr<const TriangleMesh> mesh(std::uint32_t j) const { return meshes_[j]; }
   std::vector<NodeReport> reports() const;
-  std::shared_ptr<const Graph> graph() const { return graph_; }
+  /// The tree's graph with every ffd's mesh attached in plan order (the working graph attaches
+  /// them as the jobs finish, in whatever order that is).
+  std::shared_ptr<const Graph> graph() const {
+    std::shared_ptr<const Graph> g = tree_.graph_ptr();
+    for (std::uint32_t j = 0; j < jobs_.size(); ++j)
+      if (leaves_[j]) g = attach_ffd_mesh(*g, jobs_[j].node, leaves_[j]);
+    return g;
+  }
 
  private:
   void run(std::uint32_t j);
@@ -207,6 +217,7 @@ class Runner {
   std::vector<std::shared_ptr<const TriangleMesh>> meshes_;
   std::vector<NodeReport> reports_;
   std::vector<std::exception_ptr> errors_;
+  std::vector<std::shared_ptr<const MeshLeaf>> leaves_;  // ffd jobs: their deformed meshes
   std::atomic<std::size_t> done_{0};
   double reported_ = 0.0;
 };
@@ -245,7 +256,11 @@ void Runner::run(std::uint32_t j) {
   }
   r.seconds = since(t0);
   ++done_;
-  progress(0.0);
+  try {
+    progress(0.0);
+  } catch (...) {  // a callback that throws ends the run as this job's error, in plan order
+    if (!errors_[j]) errors_[j] = std::current_exception();
+  }
 }
 
 void Runner::run_all() {
@@ -299,6 +314,7 @@ std::shared_ptr<const TriangleMesh> Runner::execute(const Job& job, NodeReport& 
       {
         std::lock_guard lock(graph_mutex_);
         graph_ = attach_ffd_mesh(*graph_, n, leaf);
+        leaves_[std::size_t(&job - jobs_.data())] = leaf;
       }
       return leaf->surface();
     }
@@ -340,11 +356,13 @@ std::shared_ptr<const TriangleMesh> Runner::trim(const Job& job, const std::shar
     r.polygonize = r.local.patch;
     cause = local_defect(m, r.local);
     if (cause.empty()) return std::make_shared<const TriangleMesh>(std::move(m));
-    cause = "the result had " + cause;
+    if (!m.triangles.empty()) cause = "the result had " + cause;
   } catch (const MeshCancelled&) {
     throw;
   } catch (const std::exception& e) {
     cause = e.what();
+  } catch (...) {
+    cause = "an unknown exception";
   }
   r.reason = JobReason::Fallback;
   r.fallback_cause = cause;

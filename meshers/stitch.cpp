@@ -273,7 +273,7 @@ TriangleMesh stitch(std::span<const TriangleMesh* const> pieces, const StitchOpt
     const std::size_t n = ring.size();
     for (std::size_t i = 0; i < n; ++i) {
       const std::uint32_t p = ring[(first + i) % n], q = ring[(first + i + 1) % n];
-      if (p != apex && q != apex) out.triangles.push_back({p, q, apex});
+      if (p != apex && q != apex && p != q) out.triangles.push_back({p, q, apex});
     }
   }
   if (stats) *stats = st;

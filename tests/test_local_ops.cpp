@@ -176,11 +176,14 @@ TEST(LocalBlends, PrimitivesAndMeshLeaves) {
 }
 
 // Where a local strategy cannot make a sound mesh, the node is polygonized globally and the
-// report says why. The case known to need that today: a crop whose cap has a hole (a ring cut
-// through its middle: planar caps close simple polygons). When one starts to succeed, move it
-// to the lists above.
+// report says why. The cases known to need that today: operands on each other's surface (they
+// cut each other away entirely), and a crop whose cap has a hole (a ring cut through its
+// middle: planar caps close simple polygons). When one starts to succeed, move it to the lists
+// above.
 TEST(LocalStrategies, FallBackWhereTheyCannot) {
   const std::vector<Case> cases = {
+      {"a ball united with itself", 0, [](Builder& b) { return b.unite({b.point({0, 0, 0}, {1.0}), b.point({0, 0, 0}, {1.0})}); },
+       JobStrategy::TrimBoolean},
       {"half a ring", 0,
        [](Builder& b) { return b.crop(b.circle({0, 0, 0}, {0, 0, 1}, 0.5, {0.3}), {-1, -1, -1}, {1, 1, 0}); },
        JobStrategy::TrimCrop},
