@@ -95,9 +95,7 @@ TriangleMesh uv_sphere(unsigned rings, unsigned segments, double radius = 1.0, d
 /// b's triangles after a's, on their own vertices: one soup.
 TriangleMesh soup(const TriangleMesh& a, const TriangleMesh& b) {
   TriangleMesh m = a;
-  const auto off = static_cast<unsigned>(a.positions.size());
-  m.positions.insert(m.positions.end(), b.positions.begin(), b.positions.end());
-  for (const auto& t : b.triangles) m.triangles.push_back(t + glm::uvec3(off));
+  append(m, b);
   return m;
 }
 
