@@ -20,22 +20,17 @@ namespace {
 
 constexpr std::uint32_t kNo = ~0u;
 
-// All pieces in one soup; vertex ids are global, earlier pieces first.
-struct Soup {
-  std::vector<glm::dvec3> positions;
+// All pieces in one mesh; vertex ids are global, earlier pieces first.
+struct Soup : TriangleMesh {
   std::vector<std::uint32_t> piece;  // per vertex
-  std::vector<glm::uvec3> triangles;
 };
 
 Soup concatenate(std::span<const TriangleMesh* const> pieces) {
   Soup s;
-  TriangleMesh all;
   for (std::size_t k = 0; k < pieces.size(); ++k) {
-    append(all, *pieces[k]);
-    s.piece.resize(all.positions.size(), std::uint32_t(k));
+    append(s, *pieces[k]);
+    s.piece.resize(s.positions.size(), std::uint32_t(k));
   }
-  s.positions = std::move(all.positions);
-  s.triangles = std::move(all.triangles);
   return s;
 }
 
@@ -48,15 +43,12 @@ struct Boundary {
 };
 
 Boundary find_boundary(const Soup& s) {
-  TriangleMesh view;  // boundary_edges() reads a mesh; the soup's arrays are copied once
-  view.positions = s.positions;
-  view.triangles = s.triangles;
   Boundary b;
   b.edge_of_slot.assign(3 * s.triangles.size(), kNo);
   b.out_edge.assign(s.positions.size(), kNo);
   b.in_edge.assign(s.positions.size(), kNo);
   b.scale.assign(s.positions.size(), std::numeric_limits<double>::infinity());
-  for (const BoundaryEdge& be : boundary_edges(view)) {
+  for (const BoundaryEdge& be : boundary_edges(s)) {
     const std::uint32_t e = std::uint32_t(b.from.size());
     if (b.out_edge[be.from] != kNo || b.in_edge[be.to] != kNo)
       throw StitchError("a piece's boundary touches itself at a vertex (a pinched boundary)");

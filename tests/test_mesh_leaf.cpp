@@ -23,13 +23,7 @@ namespace {
 
 using test::Rng;
 
-// Every property test seeds from its own name (FNV-1a, the same on every platform).
-Rng seeded() {
-  std::uint64_t h = 1469598103934665603ull;
-  for (const char* s = ::testing::UnitTest::GetInstance()->current_test_info()->name(); *s; ++s)
-    h = (h ^ static_cast<unsigned char>(*s)) * 1099511628211ull;
-  return Rng(h);
-}
+using test::seeded;
 
 struct Soup {
   std::vector<glm::dvec3> positions;

@@ -31,12 +31,7 @@ namespace {
 using glm::dvec3;
 using test::Rng;
 
-Rng seeded() {
-  std::uint64_t h = 1469598103934665603ull;
-  for (const char* s = ::testing::UnitTest::GetInstance()->current_test_info()->name(); *s; ++s)
-    h = (h ^ static_cast<unsigned char>(*s)) * 1099511628211ull;
-  return Rng(h);
-}
+using test::seeded;
 
 // ---- Meshes ------------------------------------------------------------------------------------
 

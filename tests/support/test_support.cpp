@@ -55,6 +55,13 @@ CliResult run_cli(const std::string& args, const std::string& input) {
   return r;
 }
 
+Rng seeded() {
+  std::uint64_t h = 1469598103934665603ull;
+  for (const char* s = ::testing::UnitTest::GetInstance()->current_test_info()->name(); *s; ++s)
+    h = (h ^ static_cast<unsigned char>(*s)) * 1099511628211ull;
+  return Rng(h);
+}
+
 MeshOptions mesh_options(double h, MeshStrategy s) {
   MeshOptions o;
   o.precision = h;

@@ -34,4 +34,7 @@ MeshOptions mesh_options(double h, MeshStrategy s = MeshStrategy::Auto);
 /// Deterministic random numbers: every property test seeds from its own name.
 using Rng = std::mt19937_64;
 
+/// A generator seeded from the running test's name (FNV-1a, the same on every platform).
+Rng seeded();
+
 }  // namespace ht::test
