@@ -12,6 +12,7 @@
 // its original order, before the new vertices.
 #pragma once
 
+#include "meshers/batch_field.hpp"
 #include "meshers/triangle_mesh.hpp"
 
 #include <functional>
@@ -19,10 +20,6 @@
 #include <span>
 
 namespace ht {
-
-/// A scalar function over a batch of points: writes one value per point. It must be
-/// deterministic and may be called from any thread.
-using BatchField = std::function<void(std::span<const glm::dvec3> points, std::span<double> values)>;
 
 struct CutOptions {
   /// A vertex with a root of c within this fraction of one of its edges moves onto that root...

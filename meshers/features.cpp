@@ -96,8 +96,9 @@ void mark_suspect_cells(std::span<const float> values, int cells, const FeatureO
 }
 
 CreaseStats split_creases(TriangleMesh& mesh, std::span<const glm::vec3> normals, const TapeEvaluator& eval, double T,
-                          double h, const FeatureOptions& options) {
+                          double h, const FeatureOptions& options, std::vector<std::uint8_t>* on_crease) {
   CreaseStats stats;
+  if (on_crease) on_crease->assign(mesh.positions.size(), 0);
   auto& P = mesh.positions;
   const float cos_sharp = float(cos_degrees(options.sharp_angle_degrees));
   auto known = [&](std::uint32_t v) { return normals[v] != glm::vec3(0.0f); };
@@ -377,6 +378,7 @@ CreaseStats split_creases(TriangleMesh& mesh, std::span<const glm::vec3> normals
     if (snap_of[v] != ~0u) {
       P[v] = points[snap_of[v]];
       ++stats.moved_vertices;
+      if (on_crease) (*on_crease)[v] = 1;
     }
   std::vector<std::uint32_t> renumber(std::size_t(E) + corner_tris.size(), ~0u);
   for (glm::uvec3& tri : out)
@@ -394,6 +396,7 @@ CreaseStats split_creases(TriangleMesh& mesh, std::span<const glm::vec3> normals
   for (std::size_t i = 0; i < renumber.size(); ++i)
     if (renumber[i] != ~0u) ++(i < E ? stats.split_edges : stats.corners);
   mesh.triangles = std::move(out);
+  if (on_crease) on_crease->resize(P.size(), 1);
   return stats;
 }
 

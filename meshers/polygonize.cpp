@@ -4,6 +4,9 @@
 #include "meshers/polygonize.hpp"
 
 #include "meshers/features.hpp"
+#include "meshers/quality.hpp"
+#include "meshers/relax.hpp"
+#include "meshers/surface_field.hpp"
 
 #include "runtime/tape.hpp"
 #include "runtime/tape_eval.hpp"
@@ -439,13 +442,28 @@ TriangleMesh polygonize(std::shared_ptr<const Graph> graph, NodeId root, double 
   std::vector<glm::vec3> normals(all.size());
   bool any_normal = false;
   for (std::size_t i = 0; i < all.size(); ++i) any_normal |= (normals[i] = all[i].normal) != glm::vec3(0.0f);
+  std::vector<std::uint8_t> on_crease;
   if (any_normal) {
     const TapeEvaluator eval(std::make_shared<const Tape>(compile_tape(graph, root, T)));
-    const CreaseStats crease = split_creases(mesh, normals, eval, T, h, options.features);
+    const CreaseStats crease = split_creases(mesh, normals, eval, T, h, options.features, &on_crease);
     stats.crease_edges = crease.split_edges;
     stats.corner_vertices = crease.corners;
   }
   stats.seconds_features = seconds_since(t0);
+
+  // 6. Well-shaped triangles (meshers/quality.hpp), on the bricks' own tapes; crease points stay.
+  if (options.quality.enabled) {
+    SurfaceField field(graph, root, T, grid.origin, kCells * h);
+    for (std::size_t a = 0; a < active.size(); ++a) field.adopt(grid.brick_at(active[a]), tapes[a]);
+    const BatchField on_bricks = [&field](std::span<const glm::dvec3> p, std::span<double> v) { field.values(p, v); };
+    // The feature step's work stays as it is: crease points and two rings around them.
+    std::vector<std::uint8_t> keep = on_crease;
+    if (!keep.empty()) {
+      const std::vector<std::uint8_t> any(keep.size(), 1), near = rings_around(mesh, on_crease, any, 2);
+      for (std::size_t v = 0; v < keep.size(); ++v) keep[v] |= near[v];
+    }
+    improve_quality(mesh, keep, {}, on_bricks, T, h, options.quality, &stats.quality);
+  }
   if (options.progress) options.progress(1.0);
   if (stats_out) *stats_out = stats;
   return mesh;

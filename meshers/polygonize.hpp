@@ -17,6 +17,7 @@
 #pragma once
 
 #include "meshers/features.hpp"
+#include "meshers/quality.hpp"
 #include "meshers/triangle_mesh.hpp"
 #include "runtime/aabb.hpp"
 #include "runtime/graph.hpp"
@@ -38,6 +39,8 @@ struct PolygonizeOptions {
   double refine_tolerance = 1e-3;
   bool sharp_features = true;                    ///< split edges along creases (meshers/features.hpp)
   FeatureOptions features;
+  /// The quality pass over the extracted mesh (meshers/quality.hpp); on by default.
+  QualityOptions quality;
   /// Called from the calling thread with the fraction done, at most about 100 times.
   std::function<void(double)> progress;
   /// When set, only the bricks it accepts are meshed: the result is the part of the surface in
@@ -55,6 +58,7 @@ struct PolygonizeStats {
   std::size_t bricks_total = 0, bricks_active = 0;
   std::size_t points_evaluated = 0;
   std::size_t crease_edges = 0, corner_vertices = 0;  ///< sharp features (meshers/features.hpp)
+  QualityStats quality;                               ///< the quality pass (meshers/quality.hpp)
   double seconds_classify = 0, seconds_sample = 0, seconds_extract = 0, seconds_merge = 0, seconds_features = 0;
   Aabb domain;
 };

@@ -1,6 +1,6 @@
 #include "meshers/remesh.hpp"
 
-#include "meshers/edges.hpp"
+#include "meshers/submesh.hpp"
 #include "nodes/trimesh.hpp"
 #include "runtime/tape_eval.hpp"
 
@@ -61,28 +61,8 @@ class Remesher {
     }
   }
 
-  // The remeshed triangles in the whole mesh's numbering: surviving vertices keep their index
-  // (and position), new ones are appended to `positions`.
-  void result(std::vector<glm::dvec3>& positions, std::vector<glm::uvec3>& triangles) {
-    m_.garbage_collection();
-    std::vector<std::uint32_t> index(m_.n_vertices());
-    for (const auto v : m_.vertices()) {
-      std::uint32_t o = m_.property(origin_, v);
-      if (o == ~0u) {
-        o = std::uint32_t(positions.size());
-        positions.push_back(g(m_.point(v)));
-      } else {
-        positions[o] = g(m_.point(v));
-      }
-      index[std::size_t(v.idx())] = o;
-    }
-    for (const auto f : m_.faces()) {
-      glm::uvec3 t;
-      int k = 0;
-      for (const auto v : m_.fv_range(f)) t[k++] = index[std::size_t(v.idx())];
-      triangles.push_back(t);
-    }
-  }
+  // The remeshed triangles, and each vertex's index in the whole mesh (~0u for new ones).
+  void result(TriangleMesh& out, std::vector<std::uint32_t>& origin) { from_openmesh(m_, origin_, out, origin); }
 
  private:
   bool locked(TriMesh::VertexHandle v) const { return m_.property(locked_, v); }
@@ -232,27 +212,6 @@ class Remesher {
   bool ok_ = false;
 };
 
-// The triangles taken must form a manifold OpenMesh accepts: where their boundary touches
-// itself at a vertex (two fans of that vertex taken, not the ones between), the whole fan of that
-// vertex is taken too, until no such vertex is left.
-void widen_past_pinches(const TriangleMesh& mesh, std::vector<std::uint8_t>& in_sub) {
-  for (int round = 0; round < 8; ++round) {
-    TriangleMesh taken;
-    taken.positions.resize(mesh.positions.size());
-    std::vector<std::uint32_t> source;
-    for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t)
-      if (in_sub[t]) taken.triangles.push_back(mesh.triangles[t]), source.push_back(t);
-    std::vector<std::uint8_t> out(mesh.positions.size(), 0), pinch(mesh.positions.size(), 0);
-    bool any = false;
-    for (const BoundaryEdge& e : boundary_edges(taken))
-      if (++out[e.from] == 2) pinch[e.from] = 1, any = true;
-    if (!any) return;
-    for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
-      for (int k = 0; k < 3; ++k)
-        if (pinch[mesh.triangles[t][k]]) in_sub[t] = 1;
-  }
-}
-
 }  // namespace
 
 void remesh_region(TriangleMesh& mesh, std::span<const std::uint8_t> region, std::span<const std::uint8_t> fixed,
@@ -260,53 +219,16 @@ void remesh_region(TriangleMesh& mesh, std::span<const std::uint8_t> region, std
   RemeshStats st;
   // Only the triangles with a corner in the region go to OpenMesh; a vertex that any other
   // triangle uses is on the rim and stays.
-  const std::size_t nv = mesh.positions.size();
-  std::vector<std::uint8_t> in_sub(mesh.triangles.size(), 0), rim(nv, 0);
-  for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
-    const glm::uvec3 tri = mesh.triangles[t];
-    in_sub[t] = region[tri[0]] || region[tri[1]] || region[tri[2]];
-  }
-  widen_past_pinches(mesh, in_sub);
-  for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
-    if (!in_sub[t]) rim[mesh.triangles[t][0]] = rim[mesh.triangles[t][1]] = rim[mesh.triangles[t][2]] = 1;
-  TriangleMesh sub;
-  std::vector<std::uint32_t> local(nv, ~0u), origin;
-  std::vector<std::uint8_t> locked;
-  std::vector<glm::uvec3> kept;
-  for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
-    const glm::uvec3 tri = mesh.triangles[t];
-    if (!in_sub[t]) {
-      kept.push_back(tri);
-      continue;
-    }
-    glm::uvec3 lt;
-    for (int k = 0; k < 3; ++k) {
-      const std::uint32_t v = tri[k];
-      if (local[v] == ~0u) {
-        local[v] = std::uint32_t(sub.positions.size());
-        sub.positions.push_back(mesh.positions[v]);
-        origin.push_back(v);
-        locked.push_back(!region[v] || fixed[v] || rim[v]);
-      }
-      lt[k] = local[v];
-    }
-    sub.triangles.push_back(lt);
-  }
-  Remesher r(sub, origin, locked, field, threshold, options.target);
-  if (r.ok() && !sub.triangles.empty()) {
+  const Submesh sub = take_region(mesh, region);
+  std::vector<std::uint8_t> locked(sub.mesh.positions.size());
+  for (std::size_t v = 0; v < locked.size(); ++v) locked[v] = sub.rim[v] || fixed[sub.origin[v]];
+  Remesher r(sub.mesh, sub.origin, locked, field, threshold, options.target);
+  if (r.ok() && !sub.mesh.triangles.empty()) {
     r.run(options.iterations, st);
-    std::vector<glm::dvec3> positions = mesh.positions;
-    r.result(positions, kept);
-    // Vertices collapsed away leave unused slots: compact, keeping the order.
-    std::vector<std::uint32_t> index(positions.size(), ~0u);
-    for (const glm::uvec3& t : kept)
-      for (int k = 0; k < 3; ++k) index[t[k]] = 0;
-    TriangleMesh out;
-    for (std::uint32_t v = 0; v < positions.size(); ++v)
-      if (index[v] != ~0u) index[v] = std::uint32_t(out.positions.size()), out.positions.push_back(positions[v]);
-    out.triangles.reserve(kept.size());
-    for (const glm::uvec3& t : kept) out.triangles.push_back({index[t[0]], index[t[1]], index[t[2]]});
-    mesh = std::move(out);
+    TriangleMesh part;
+    std::vector<std::uint32_t> origin;
+    r.result(part, origin);
+    put_back(mesh, sub, part, origin);
   }
   if (stats) *stats = st;
 }

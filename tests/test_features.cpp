@@ -23,21 +23,16 @@ namespace {
 
 constexpr double kT = 0.5;
 
-struct Result {
-  TriangleMesh mesh;
-  MeshChecks checks;
-  PolygonizeStats stats;
-};
+using Result = test::Polygonized;
 
+// The feature step is measured on its own, beside plain marching tetrahedra: the quality pass
+// (tests/test_quality.cpp) smooths the chamfer that the feature step replaces.
 Result mesh(const Tree& t, double h, bool sharp) {
   PolygonizeOptions o;
   o.precision = h;
   o.sharp_features = sharp;
-  Result r;
-  r.mesh = polygonize(t.graph_ptr(), t.root(), kT, o, &r.stats);
-  r.checks = check_mesh(r.mesh);
-  measure_surface_error(r.mesh, t.evaluator(), kT, r.checks);
-  return r;
+  o.quality.enabled = false;
+  return test::polygonize_checked(t, o);
 }
 
 struct Scene {

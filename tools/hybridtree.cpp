@@ -205,7 +205,7 @@ int cmd_eval(const std::string& scene, const std::string& points_file, bool grad
 
 struct MeshArgs {
   std::string scene, out, strategy, stats_json;  // strategy: empty = the scene's
-  std::string sharp = "on";
+  std::string sharp = "on", quality = "on";
   double precision = 0.0, memory_gib = 4.0;
   int threads = 0;
 };
@@ -255,9 +255,12 @@ nlohmann::json node_json(const ht::Graph& g, const ht::NodeReport& e) {
                       {"seconds", e.seconds}};
   if (e.rho >= 0) n["rho"] = e.rho;
   if (!e.fallback_cause.empty()) n["fallback_cause"] = e.fallback_cause;
-  if (e.polygonized)
+  if (e.polygonized) {
     n["bricks"] = {{"total", e.polygonize.bricks_total}, {"active", e.polygonize.bricks_active},
                    {"points_evaluated", e.polygonize.points_evaluated}};
+    n["quality"] = {{"collapses", e.polygonize.quality.collapses}, {"flips", e.polygonize.quality.flips},
+                    {"moved", e.polygonize.quality.moved}, {"seconds", e.polygonize.quality.seconds}};
+  }
   if (e.strategy == ht::JobStrategy::TrimBlend || e.strategy == ht::JobStrategy::TrimBoolean ||
       e.strategy == ht::JobStrategy::TrimCrop || e.strategy == ht::JobStrategy::TrimLocalBlend)
     n["local"] = {{"operand_triangles", e.local.operand_triangles},
@@ -290,6 +293,13 @@ ht::PolygonizeStats total_polygonize(const ht::MeshResult& r) {
     s.seconds_extract += p.seconds_extract;
     s.seconds_merge += p.seconds_merge;
     s.seconds_features += p.seconds_features;
+    s.quality.collapses += p.quality.collapses;
+    s.quality.flips += p.quality.flips;
+    s.quality.splits += p.quality.splits;
+    s.quality.moved += p.quality.moved;
+    s.quality.reverted += p.quality.reverted;
+    s.quality.skipped |= p.quality.skipped;
+    s.quality.seconds += p.quality.seconds;
   }
   return s;
 }
@@ -307,6 +317,7 @@ int cmd_mesh(const MeshArgs& a) {
   options.precision = h;
   options.polygonize.memory_budget = static_cast<std::size_t>(a.memory_gib * double(1u << 30));
   options.polygonize.sharp_features = a.sharp == "on";
+  options.polygonize.quality.enabled = a.quality == "on";
   options.blend_overlap = tree.mesher_settings().blend_overlap;
   options.progress = progress_bar();
   options.cancel = &interrupted;
@@ -380,12 +391,17 @@ int cmd_mesh(const MeshArgs& a) {
     const ht::PolygonizeStats stats = total_polygonize(result);
     j["bricks"] = {{"total", stats.bricks_total}, {"active", stats.bricks_active}};
     j["sharp_features"] = {{"crease_edges_split", stats.crease_edges}, {"corner_vertices", stats.corner_vertices}};
+    j["quality"] = {{"enabled", options.polygonize.quality.enabled}, {"collapses", stats.quality.collapses},
+                    {"flips", stats.quality.flips},         {"splits", stats.quality.splits},
+                    {"moved", stats.quality.moved},         {"reverted", stats.quality.reverted},
+                    {"skipped", stats.quality.skipped}};
     j["seconds"] = {{"load", load_s},
                     {"classify", stats.seconds_classify},
                     {"sample", stats.seconds_sample},
                     {"extract", stats.seconds_extract},
                     {"merge", stats.seconds_merge},
                     {"features", stats.seconds_features},
+                    {"quality", stats.quality.seconds},
                     {"mesh_total", mesh_s},
                     {"checks", check_s},
                     {"write", write_s}};
@@ -428,6 +444,10 @@ int main(int argc, char** argv) {
   mesh_cmd->add_option("--sharp-features", mesh_args.sharp,
                        "on: split edges along creases of min/max Booleans, crops and mesh leaves (default); off: plain "
                        "marching tetrahedra")
+      ->check(CLI::IsMember({"on", "off"}));
+  mesh_cmd->add_option("--quality", mesh_args.quality,
+                       "on: collapse needles, flip and relax what the polygonizer extracts into well-shaped triangles "
+                       "(default); off: keep the extracted triangles")
       ->check(CLI::IsMember({"on", "off"}));
 
   int count = 250;

@@ -69,4 +69,12 @@ MeshOptions mesh_options(double h, MeshStrategy s) {
   return o;
 }
 
+Polygonized polygonize_checked(const Tree& tree, const PolygonizeOptions& options) {
+  Polygonized r;
+  r.mesh = polygonize(tree.graph_ptr(), tree.root(), tree.threshold(), options, &r.stats);
+  r.checks = check_mesh(r.mesh);
+  if (!r.mesh.triangles.empty()) measure_surface_error(r.mesh, tree.evaluator(), tree.threshold(), r.checks);
+  return r;
+}
+
 }  // namespace ht::test

@@ -2,6 +2,7 @@
 // run the command-line tool.
 #pragma once
 
+#include "meshers/mesh_checks.hpp"
 #include "meshers/mesh_plan.hpp"
 
 #include <cstdint>
@@ -36,5 +37,13 @@ using Rng = std::mt19937_64;
 
 /// A generator seeded from the running test's name (FNV-1a, the same on every platform).
 Rng seeded();
+
+/// A tree's root polygonized at T = tree.threshold(), with its checks and surface error.
+struct Polygonized {
+  TriangleMesh mesh;
+  MeshChecks checks;
+  PolygonizeStats stats;
+};
+Polygonized polygonize_checked(const Tree& tree, const PolygonizeOptions& options);
 
 }  // namespace ht::test

@@ -1,0 +1,15 @@
+// A scalar function over a batch of points, the form in which meshers pass fields around (a
+// tape, an operand's field shifted to a cut's zero, a SurfaceField's bricks).
+#pragma once
+
+#include <glm/vec3.hpp>
+
+#include <functional>
+#include <span>
+
+namespace ht {
+
+/// Writes one value per point. It must be deterministic and may be called from any thread.
+using BatchField = std::function<void(std::span<const glm::dvec3> points, std::span<double> values)>;
+
+}  // namespace ht

@@ -1,0 +1,431 @@
+#include "meshers/quality.hpp"
+
+#include "meshers/submesh.hpp"
+#include "nodes/trimesh.hpp"
+
+#include <glm/geometric.hpp>
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <vector>
+
+namespace ht {
+namespace {
+
+using VH = TriMesh::VertexHandle;
+using FH = TriMesh::FaceHandle;
+using EH = TriMesh::EdgeHandle;
+using HH = TriMesh::HalfedgeHandle;
+
+// Angles by their cosines (meshers compare thinness(), the cosine of a triangle's smallest angle).
+constexpr double kNeedleCos = 0.9396926207859084;   // cos 20 degrees: a thinner triangle may lose its shortest edge
+constexpr double kNeedleRatio = 0.5;                // ... when that edge is this short beside the next
+constexpr double kCoplanarCos = 0.9063077870366499; // cos 25 degrees: flips only between such faces
+constexpr double kTurnCos = 0.5;                    // cos 60 degrees: a face may not turn further
+constexpr double kKeepPlaneCos = 0.9396926207859084; // cos 20 degrees: a collapse may not turn a sound face further
+constexpr double kDegenerateCos = 0.9999619230641713; // cos 0.5 degrees: no collapse leaves a face this thin
+constexpr double kAimCos = 0.8191520442889918;      // cos 35 degrees: faces thinner than this are worked on
+constexpr double kWorseCos = 0.9659258262890683;    // cos 15 degrees: a relaxation may not leave a face thinner
+
+glm::dvec3 g(const TriMesh::Point& p) { return {p[0], p[1], p[2]}; }
+TriMesh::Point om(const glm::dvec3& p) { return {p.x, p.y, p.z}; }
+
+// The cosine of the smallest corner angle of triangle abc: the angle opposite the shortest edge.
+// Cosines order angles the other way round (1 for a degenerate triangle), without atan2 or acos.
+double thinness(const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c) {
+  double l[3] = {glm::dot(b - c, b - c), glm::dot(c - a, c - a), glm::dot(a - b, a - b)};
+  std::sort(l, l + 3);
+  const double den = 2.0 * std::sqrt(l[1] * l[2]);
+  return den > 0 ? (l[1] + l[2] - l[0]) / den : 1.0;
+}
+
+glm::dvec3 unit_normal(const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c) {
+  const glm::dvec3 n = glm::cross(b - a, c - a);
+  const double l = glm::length(n);
+  return l > 0 ? n / l : glm::dvec3(0.0);
+}
+
+class Improver {
+ public:
+  Improver(const TriangleMesh& in, std::span<const std::uint8_t> locked, const BatchField& field, double T, double h,
+           const QualityOptions& options)
+      : field_(field), T_(T), h_(h), o_(options) {
+    m_.request_vertex_status();
+    m_.request_edge_status();
+    m_.request_halfedge_status();
+    m_.request_face_status();
+    m_.add_property(locked_);
+    m_.add_property(origin_);
+    m_.add_property(slope_);
+    for (std::size_t v = 0; v < in.positions.size(); ++v) {
+      const VH vh = m_.add_vertex(om(in.positions[v]));
+      m_.property(slope_, vh) = std::nan("");
+      m_.property(locked_, vh) = !locked.empty() && locked[v];
+      m_.property(origin_, vh) = std::uint32_t(v);
+    }
+    for (const glm::uvec3& t : in.triangles)
+      if (!m_.add_face(VH(int(t[0])), VH(int(t[1])), VH(int(t[2]))).is_valid()) return;
+    // An open patch keeps its rim.
+    for (const VH v : m_.vertices())
+      if (m_.is_boundary(v)) m_.property(locked_, v) = true;
+    ok_ = true;
+  }
+  bool ok() const { return ok_; }
+
+  void run(QualityStats& st) {
+    for (int it = 0; it < o_.iterations; ++it) {
+      st.splits += split();
+      st.collapses += collapse();
+      st.flips += flip();
+      relax(st);
+    }
+    st.flips += flip();
+  }
+
+  // The mesh, compacted, and each vertex's index in the input (~0u for new ones).
+  void result(TriangleMesh& out, std::vector<std::uint32_t>& origin) { from_openmesh(m_, origin_, out, origin); }
+
+ private:
+  bool locked(VH v) const { return m_.property(locked_, v); }
+  bool frozen(EH e) const {
+    const HH h = m_.halfedge_handle(e, 0);
+    return locked(m_.from_vertex_handle(h)) && locked(m_.to_vertex_handle(h));
+  }
+  glm::dvec3 p(VH v) const { return g(m_.point(v)); }
+  glm::dvec3 ring_normal(VH v) const {
+    glm::dvec3 n(0.0);
+    for (const FH f : m_.vf_range(v)) {
+      const auto c = corners(f);
+      n += glm::cross(p(c[1]) - p(c[0]), p(c[2]) - p(c[0]));
+    }
+    const double l = glm::length(n);
+    return l > 0 ? n / l : n;
+  }
+  double ring_thinness(VH v) const {
+    double worst = -1.0;
+    for (const FH f : m_.vf_range(v)) {
+      const auto c = corners(f);
+      worst = std::max(worst, thinness(p(c[0]), p(c[1]), p(c[2])));
+    }
+    return worst;
+  }
+  // Next to a locked vertex (a crease, a rim): the ring may span two sheets, so the vertex
+  // neither moves nor goes away; only flips between coplanar faces reach it.
+  bool near_locked(VH v) const {
+    for (const VH w : m_.vv_range(v))
+      if (locked(w)) return true;
+    return false;
+  }
+  std::array<VH, 3> corners(FH f) const {
+    const HH h = m_.halfedge_handle(f);
+    return {m_.from_vertex_handle(h), m_.to_vertex_handle(h), m_.to_vertex_handle(m_.next_halfedge_handle(h))};
+  }
+
+  // Newton steps toward f = T along each point's direction (a unit normal), on field values
+  // only (a gradient costs five values). The derivative along the direction, slope[i], comes
+  // from a difference quotient where it is not known yet (not finite) and is reused after: a
+  // vertex's slope changes little as it slides along the surface. A point whose step would leave
+  // the cell around it stays.
+  void project(std::vector<glm::dvec3>& at, const std::vector<glm::dvec3>& dir, std::vector<double>& slope) {
+    const std::size_t n = at.size();
+    if (n == 0) return;
+    const double T = T_, delta = 0.05 * h_;
+    std::vector<std::uint32_t> unknown;
+    for (std::size_t i = 0; i < n; ++i)
+      if (!std::isfinite(slope[i])) unknown.push_back(std::uint32_t(i));
+    std::vector<glm::dvec3> probe(at);
+    for (const std::uint32_t i : unknown) probe.push_back(at[i] + delta * dir[i]);
+    std::vector<double> value(probe.size());
+    const std::vector<glm::dvec3> start = at;
+    for (int s = 0; s < o_.newton_steps; ++s) {
+      if (s == 0) {
+        field_(probe, value);
+        for (std::size_t k = 0; k < unknown.size(); ++k) slope[unknown[k]] = (value[n + k] - value[unknown[k]]) / delta;
+      } else {
+        field_(at, std::span(value).first(n));
+      }
+      for (std::size_t i = 0; i < n; ++i) {
+        const double step = (T - value[i]) / slope[i];
+        at[i] += std::clamp(step, -h_, h_) * dir[i];  // NaN stays NaN: a failure
+      }
+    }
+    // A long step means the direction missed the surface (or crossed onto another sheet).
+    for (std::size_t i = 0; i < n; ++i)
+      if (!(glm::length(at[i] - start[i]) <= 0.2 * h_)) at[i] = glm::dvec3(std::nan(""));
+  }
+
+  std::size_t split() {
+    std::vector<EH> todo;
+    std::vector<glm::dvec3> mids, dirs;
+    for (const EH e : m_.edges()) {
+      if (frozen(e) || m_.calc_edge_length(e) <= 2.0 * h_) continue;
+      todo.push_back(e);
+      mids.push_back(g(m_.calc_edge_midpoint(e)));
+      glm::dvec3 n(0.0);
+      for (int side = 0; side < 2; ++side) {
+        const FH f = m_.face_handle(m_.halfedge_handle(e, side));
+        if (f.is_valid()) n += g(m_.calc_face_normal(f));
+      }
+      dirs.push_back(glm::length(n) > 0 ? glm::normalize(n) : glm::dvec3(0.0));
+    }
+    std::vector<double> slopes(todo.size(), std::nan(""));
+    project(mids, dirs, slopes);
+    for (std::size_t i = 0; i < todo.size(); ++i) {
+      if (std::isnan(mids[i].x)) continue;
+      const VH v = m_.add_vertex(om(mids[i]));
+      m_.property(locked_, v) = false;
+      m_.property(origin_, v) = ~0u;
+      m_.property(slope_, v) = slopes[i];
+      m_.split_edge(todo[i], v);
+    }
+    return todo.size();
+  }
+
+  // The thinness of the thinnest face around `from` that survives its collapse into `to`, with
+  // `from` at `to`'s place; 2 when one of them would turn over.
+  // A needle's own normal means nothing, so faces are held to the ring's area-weighted normal,
+  // which the well-shaped faces dominate.
+  double after_collapse(HH h) const {
+    const VH from = m_.from_vertex_handle(h), to = m_.to_vertex_handle(h);
+    const glm::dvec3 target = p(to), ref = ring_normal(from);
+    double worst = -1.0;
+    for (const FH f : m_.vf_range(from)) {
+      auto c = corners(f);
+      if (c[0] == to || c[1] == to || c[2] == to) continue;
+      glm::dvec3 q[3];
+      for (int k = 0; k < 3; ++k) q[k] = c[k] == from ? target : p(c[k]);
+      const glm::dvec3 n = unit_normal(q[0], q[1], q[2]);
+      const double thin = thinness(q[0], q[1], q[2]);
+      if (glm::dot(ref, n) < kTurnCos || thin > kDegenerateCos) return 2.0;
+      // A face with a shape of its own keeps its plane: beside a crease, a face may not swing
+      // over to the other sheet.
+      const glm::dvec3 a = p(c[0]), b = p(c[1]), d = p(c[2]);
+      if (thinness(a, b, d) < kNeedleCos && glm::dot(unit_normal(a, b, d), n) < kKeepPlaneCos) return 2.0;
+      worst = std::max(worst, thin);
+    }
+    return worst;
+  }
+
+  std::size_t collapse() {
+    std::size_t done = 0;
+    const std::size_t faces = m_.n_faces();
+    for (std::size_t fi = 0; fi < faces; ++fi) {
+      const FH f{int(fi)};
+      if (m_.status(f).deleted()) continue;
+      const auto c = corners(f);
+      const double thin = thinness(p(c[0]), p(c[1]), p(c[2]));
+      if (thin <= kNeedleCos) continue;
+      HH shortest;
+      double len[3] = {0, 0, 0};
+      int k = 0, at = 0;
+      for (const HH h : m_.fh_range(f)) {
+        len[k] = m_.calc_edge_length(h);
+        if (len[k] < len[at]) at = k;
+        if (k == at) shortest = h;
+        ++k;
+      }
+      const double next = std::min(len[(at + 1) % 3], len[(at + 2) % 3]);
+      if (len[at] >= kNeedleRatio * next) continue;  // a cap, not a needle: flips mend it
+      // The collapse may not leave the ring worse than it is (a cluster of needles around one
+      // grid point goes one vertex at a time, each step leaving the others as thin as before).
+      HH best;
+      double best_thin = 2.0;
+      for (const HH h : {shortest, m_.opposite_halfedge_handle(shortest)}) {
+        const VH from = m_.from_vertex_handle(h);
+        if (locked(from) || near_locked(from) || !m_.is_collapse_ok(h)) continue;
+        const double a = after_collapse(h);
+        if (a <= ring_thinness(m_.from_vertex_handle(h)) && a < best_thin) best_thin = a, best = h;
+      }
+      if (!best.is_valid()) continue;
+      m_.collapse(best);
+      ++done;
+    }
+    return done;
+  }
+
+  // Flips `e` when that makes its two triangles' thinner one less thin (max-min angle).
+  bool try_flip(EH e) {
+    if (m_.status(e).deleted() || m_.is_boundary(e)) return false;
+    const HH h = m_.halfedge_handle(e, 0), o = m_.opposite_halfedge_handle(h);
+    const VH a = m_.from_vertex_handle(h), b = m_.to_vertex_handle(h);
+    if (locked(a) || locked(b)) return false;  // the edges at a crease point are the crease's
+    const VH c = m_.to_vertex_handle(m_.next_halfedge_handle(h)), d = m_.to_vertex_handle(m_.next_halfedge_handle(o));
+    const glm::dvec3 pa = p(a), pb = p(b), pc = p(c), pd = p(d);
+    const double before = std::max(thinness(pa, pb, pc), thinness(pb, pa, pd));
+    const double after = std::max(thinness(pa, pd, pc), thinness(pd, pb, pc));
+    if (after >= before - 1e-12 || after > kDegenerateCos) return false;
+    const glm::dvec3 n1 = unit_normal(pa, pb, pc), n2 = unit_normal(pb, pa, pd);
+    if (glm::dot(n1, n2) < kCoplanarCos) return false;  // a crease or a tight bend keeps its edge
+    const glm::dvec3 up = n1 + n2;
+    if (glm::dot(unit_normal(pa, pd, pc), up) <= 0 || glm::dot(unit_normal(pd, pb, pc), up) <= 0) return false;
+    if (!m_.is_flip_ok(e)) return false;
+    m_.flip(e);
+    return true;
+  }
+
+  // Flips from a queue seeded with the edges of the thin faces; a flip queues the four edges
+  // around it. Each flip raises the smallest angle of its pair, so the queue empties.
+  std::size_t flip() {
+    std::vector<std::uint8_t> thin = thin_faces();
+    std::vector<std::uint8_t> queued(m_.n_edges(), 0);
+    std::vector<EH> queue;
+    for (std::size_t f = 0; f < thin.size(); ++f)
+      if (thin[f])
+        for (const EH e : m_.fe_range(FH{int(f)}))
+          if (!queued[std::size_t(e.idx())]) queued[std::size_t(e.idx())] = 1, queue.push_back(e);
+    std::size_t done = 0;
+    for (std::size_t at = 0; at < queue.size() && at < 16 * queued.size(); ++at) {
+      const EH e = queue[at];
+      queued[std::size_t(e.idx())] = 0;
+      if (!try_flip(e)) continue;
+      ++done;
+      const HH h = m_.halfedge_handle(e, 0), o = m_.opposite_halfedge_handle(h);
+      for (const HH x : {m_.next_halfedge_handle(h), m_.prev_halfedge_handle(h), m_.next_halfedge_handle(o),
+                         m_.prev_halfedge_handle(o)}) {
+        const EH n = m_.edge_handle(x);
+        if (!queued[std::size_t(n.idx())]) queued[std::size_t(n.idx())] = 1, queue.push_back(n);
+      }
+    }
+    return done;
+  }
+
+  // Faces whose smallest angle is under the pass's aim (computed in parallel).
+  std::vector<std::uint8_t> thin_faces() const {
+    std::vector<std::uint8_t> thin(m_.n_faces(), 0);
+    tbb::parallel_for(std::size_t(0), thin.size(), [&](std::size_t fi) {
+      const FH f{int(fi)};
+      if (m_.status(f).deleted()) return;
+      const auto c = corners(f);
+      thin[fi] = thinness(p(c[0]), p(c[1]), p(c[2])) > kAimCos;
+    });
+    return thin;
+  }
+
+  // One Jacobi step of tangential relaxation with projection, then the moves that hurt undone.
+  void relax(QualityStats& st) {
+    const std::size_t nv = m_.n_vertices();
+    std::vector<glm::dvec3> old(nv), moved, dirs, normal(nv);
+    std::vector<std::uint32_t> who;
+    for (std::size_t v = 0; v < nv; ++v) old[v] = p(VH(int(v)));
+    std::vector<glm::dvec3> target(nv);
+    std::vector<std::uint8_t> moves(nv, 0), wanted(nv, 0);
+    // Only the corners of thin faces move: the rest is as good as relaxation makes it.
+    const std::vector<std::uint8_t> thin = thin_faces();
+    for (std::size_t f = 0; f < thin.size(); ++f)
+      if (thin[f])
+        for (const VH v : corners(FH{int(f)})) wanted[std::size_t(v.idx())] = 1;
+    tbb::parallel_for(std::size_t(0), nv, [&](std::size_t vi) {
+      const VH v{int(vi)};
+      if (m_.status(v).deleted()) return;
+      glm::dvec3 c(0.0), n(0.0);
+      double area = 0;
+      for (const FH f : m_.vf_range(v)) {
+        const auto k = corners(f);
+        const glm::dvec3 a = old[std::size_t(k[0].idx())], b = old[std::size_t(k[1].idx())], d = old[std::size_t(k[2].idx())];
+        const glm::dvec3 cr = glm::cross(b - a, d - a);
+        const double w = glm::length(cr);
+        c += w * (a + b + d) / 3.0;
+        n += cr;
+        area += w;
+      }
+      const double nl = glm::length(n);
+      if (!(area > 0) || !(nl > 0)) return;
+      normal[vi] = n /= nl;
+      if (!wanted[vi] || locked(v) || near_locked(v)) return;
+      glm::dvec3 d = c / area - old[vi];
+      d -= glm::dot(d, n) * n;
+      target[vi] = old[vi] + d;
+      moves[vi] = 1;
+    });
+    for (std::size_t v = 0; v < nv; ++v)
+      if (moves[v]) who.push_back(std::uint32_t(v)), moved.push_back(target[v]), dirs.push_back(normal[v]);
+    std::vector<double> slopes(who.size());
+    for (std::size_t i = 0; i < who.size(); ++i) slopes[i] = m_.property(slope_, VH{int(who[i])});
+    project(moved, dirs, slopes);
+    for (std::size_t i = 0; i < who.size(); ++i) m_.property(slope_, VH{int(who[i])}) = slopes[i];
+    std::vector<glm::dvec3> now = old;
+    for (std::size_t i = 0; i < who.size(); ++i)
+      if (!std::isnan(moved[i].x)) now[who[i]] = moved[i];
+    // Undo the moves of every face that turned or got much thinner, until none does.
+    const std::size_t nf = m_.n_faces();
+    std::vector<std::uint8_t> bad(nf, 0);
+    for (int round = 0; round < 16; ++round) {
+      tbb::parallel_for(std::size_t(0), nf, [&](std::size_t fi) {
+        bad[fi] = 0;
+        const FH f{int(fi)};
+        if (m_.status(f).deleted()) return;
+        const auto k = corners(f);
+        const std::size_t i0 = std::size_t(k[0].idx()), i1 = std::size_t(k[1].idx()), i2 = std::size_t(k[2].idx());
+        if (now[i0] == old[i0] && now[i1] == old[i1] && now[i2] == old[i2]) return;
+        // Held to its corners' ring normals: a sliver's own normal means nothing.
+        const glm::dvec3 ref = normal[i0] + normal[i1] + normal[i2], after = unit_normal(now[i0], now[i1], now[i2]);
+        const double t0 = thinness(old[i0], old[i1], old[i2]), t1 = thinness(now[i0], now[i1], now[i2]);
+        bad[fi] = glm::dot(ref, after) < kTurnCos * glm::length(ref) || (t1 > t0 && t1 > kWorseCos) || t1 > kDegenerateCos;
+      });
+      std::size_t undone = 0;
+      for (std::size_t fi = 0; fi < nf; ++fi) {
+        if (!bad[fi]) continue;
+        for (const VH v : corners(FH(int(fi)))) {
+          const std::size_t i = std::size_t(v.idx());
+          if (now[i] != old[i]) now[i] = old[i], ++undone;
+        }
+      }
+      st.reverted += undone;
+      if (undone == 0) break;
+    }
+    for (const std::uint32_t v : who)
+      if (now[v] != old[v]) m_.set_point(VH(int(v)), om(now[v])), ++st.moved;
+  }
+
+  TriMesh m_;
+  OpenMesh::VPropHandleT<bool> locked_;
+  OpenMesh::VPropHandleT<std::uint32_t> origin_;
+  OpenMesh::VPropHandleT<double> slope_;  // f's derivative along the vertex normal, NaN until known
+  const BatchField& field_;
+  double T_, h_;
+  QualityOptions o_;
+  bool ok_ = false;
+};
+
+void improve_whole(TriangleMesh& mesh, std::span<const std::uint8_t> locked, const BatchField& field, double T, double h,
+                   const QualityOptions& options, QualityStats& st, std::vector<std::uint32_t>& origin) {
+  Improver im(mesh, locked, field, T, h, options);
+  if (!im.ok()) {
+    st.skipped = true;
+    origin.resize(mesh.positions.size());
+    for (std::size_t v = 0; v < origin.size(); ++v) origin[v] = std::uint32_t(v);
+    return;
+  }
+  im.run(st);
+  im.result(mesh, origin);
+}
+
+}  // namespace
+
+void improve_quality(TriangleMesh& mesh, std::span<const std::uint8_t> locked, std::span<const std::uint8_t> region,
+                     const BatchField& field, double threshold, double h, const QualityOptions& options,
+                     QualityStats* stats) {
+  const auto t0 = std::chrono::steady_clock::now();
+  QualityStats st;
+  std::vector<std::uint32_t> origin;
+  if (options.enabled && !mesh.triangles.empty()) {
+    if (region.empty()) {
+      improve_whole(mesh, locked, field, threshold, h, options, st, origin);
+    } else {
+      Submesh sub = take_region(mesh, region);
+      std::vector<std::uint8_t> keep(sub.mesh.positions.size());
+      for (std::size_t v = 0; v < keep.size(); ++v) keep[v] = sub.rim[v] || (!locked.empty() && locked[sub.origin[v]]);
+      TriangleMesh part = sub.mesh;
+      improve_whole(part, keep, field, threshold, h, options, st, origin);
+      for (std::uint32_t& o : origin)
+        if (o != ~0u) o = sub.origin[o];
+      put_back(mesh, sub, part, origin);
+    }
+  }
+  st.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (stats) *stats = st;
+}
+
+}  // namespace ht

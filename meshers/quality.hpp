@@ -1,0 +1,58 @@
+// The quality pass: well-shaped triangles on the surface, the topology untouched.
+//
+// Marching tetrahedra puts every vertex on a grid edge, so the triangles inherit the grid's
+// accidents: needles where the surface passes near a grid point (two vertices almost on top of
+// each other) and caps where it cuts a tetrahedron's corner off (one angle near 180 degrees).
+// The local strategies leave thin fans beside their exact seams. The pass removes both, on an
+// OpenMesh halfedge mesh with its validity checks:
+//   collapse  the shortest edge of a needle, when is_collapse_ok allows it, no triangle around
+//             it turns over, and the smallest angle around it gets better;
+//   flip      an edge whose two triangles are nearly coplanar, when is_flip_ok allows it and
+//             the smaller of their smallest angles gets better (max-min angle, so flips end);
+//   split     an edge longer than twice the precision, at its midpoint put on the surface;
+//   relax     every free vertex toward the area-weighted centroid of its ring, in its tangent
+//             plane, then back onto f = T by Newton steps along its normal on the field's values
+//             (from the polygonizer, the bricks' own tapes: meshers/surface_field.hpp);
+//             a move that turns a triangle over or worsens its smallest angle much is undone.
+// Locked vertices (crease points, corners, exact seams, a mesh's boundary, triangles kept from
+// the user's meshes) neither move nor go away, and no edge between two of them is flipped or
+// collapsed, so creases stay sharp and open patches keep their rims.
+//
+// Deterministic: the topological steps visit the mesh in a fixed order on one thread, the
+// relaxation is a Jacobi step (every vertex moves from the previous positions) in parallel.
+#pragma once
+
+#include "meshers/batch_field.hpp"
+#include "meshers/triangle_mesh.hpp"
+
+#include <cstddef>
+#include <cstdint>
+#include <span>
+
+namespace ht {
+
+struct QualityOptions {
+  bool enabled = true;  ///< false: meshers return what they extracted
+  int iterations = 3;   ///< rounds of collapse, flip and relax
+  int newton_steps = 1; ///< projection steps per relaxation
+};
+
+struct QualityStats {
+  std::size_t collapses = 0, flips = 0, splits = 0;
+  std::size_t moved = 0;     ///< vertex moves kept over all relaxations
+  std::size_t reverted = 0;  ///< vertex moves undone
+  bool skipped = false;      ///< the mesh was not a manifold OpenMesh accepts; left as it was
+  double seconds = 0.0;
+};
+
+/// Improves the triangles of `mesh` in place. `locked` holds one flag per vertex (or is empty);
+/// `region`, when not empty, one flag per vertex too: only triangles with a corner in it change
+/// (vertices outside it are locked, and the rest of the mesh keeps its vertices bit for bit and
+/// its triangles in order). `field` is the surface's field, {field = threshold} the surface, the
+/// solid where it is larger; it is called from this thread only. `h` is the precision (world
+/// units). Vertex indices change.
+void improve_quality(TriangleMesh& mesh, std::span<const std::uint8_t> locked, std::span<const std::uint8_t> region,
+                     const BatchField& field, double threshold, double h, const QualityOptions& options = {},
+                     QualityStats* stats = nullptr);
+
+}  // namespace ht

@@ -1,0 +1,108 @@
+#include "meshers/surface_field.hpp"
+
+#include "runtime/aabb.hpp"
+#include "runtime/tape.hpp"
+#include "runtime/tape_eval.hpp"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <vector>
+
+namespace ht {
+namespace {
+
+// Brick coordinates packed 21 bits an axis, offset so that negative bricks pack too.
+constexpr std::int64_t kOffset = std::int64_t(1) << 20;
+constexpr std::uint64_t kMask = (std::uint64_t(1) << 21) - 1;
+
+std::uint64_t pack(glm::i64vec3 b) {
+  auto axis = [](std::int64_t c) { return std::uint64_t(std::clamp<std::int64_t>(c + kOffset, 0, std::int64_t(kMask))); };
+  return axis(b.x) | axis(b.y) << 21 | axis(b.z) << 42;
+}
+
+glm::i64vec3 unpack(std::uint64_t k) {
+  return {std::int64_t(k & kMask) - kOffset, std::int64_t((k >> 21) & kMask) - kOffset, std::int64_t(k >> 42) - kOffset};
+}
+
+}  // namespace
+
+SurfaceField::SurfaceField(std::shared_ptr<const Graph> graph, NodeId root, double threshold, glm::dvec3 origin,
+                           double brick, bool under_blend)
+    : graph_(std::move(graph)), root_(root), threshold_(threshold), origin_(origin), brick_(brick), under_blend_(under_blend) {}
+
+SurfaceField::~SurfaceField() = default;
+
+void SurfaceField::adopt(glm::ivec3 b, std::shared_ptr<const Tape> tape) {
+  evaluators_[pack(glm::i64vec3(b))] = std::make_unique<TapeEvaluator>(std::move(tape));
+}
+
+std::uint64_t SurfaceField::key_of(const glm::dvec3& p) const {
+  const glm::dvec3 c = glm::floor((p - origin_) / brick_);
+  // A non-finite point lands in a clamped corner brick; its value comes out non-finite anyway.
+  const glm::dvec3 lim(double(kOffset - 1));
+  return pack(glm::i64vec3(glm::clamp((std::isfinite(c.x) && std::isfinite(c.y) && std::isfinite(c.z)) ? c : glm::dvec3(0.0), -lim, lim)));
+}
+
+SurfaceField::Bins SurfaceField::bin(std::span<const glm::dvec3> points) {
+  const std::size_t n = points.size();
+  Bins b;
+  b.order.resize(n);
+  tbb::parallel_for(std::size_t(0), n, [&](std::size_t i) { b.order[i] = {key_of(points[i]), std::uint32_t(i)}; });
+  std::sort(b.order.begin(), b.order.end());
+  for (std::size_t i = 0; i < n; ++i)
+    if (i == 0 || b.order[i].first != b.order[i - 1].first) b.runs.push_back(i);
+  b.runs.push_back(n);
+  const std::size_t bins = b.runs.size() - 1;
+  // Compile the bricks met for the first time, in parallel, then file them in order.
+  std::vector<std::uint64_t> missing;
+  for (std::size_t r = 0; r < bins; ++r)
+    if (!evaluators_.count(b.order[b.runs[r]].first)) missing.push_back(b.order[b.runs[r]].first);
+  std::vector<std::unique_ptr<TapeEvaluator>> compiled(missing.size());
+  tbb::parallel_for(std::size_t(0), missing.size(), [&](std::size_t i) {
+    const glm::dvec3 lo = origin_ + glm::dvec3(unpack(missing[i])) * brick_;
+    const Aabb box{lo, lo + glm::dvec3(brick_)};
+    compiled[i] = std::make_unique<TapeEvaluator>(
+        std::make_shared<const Tape>(compile_tape(graph_, root_, threshold_, &box, under_blend_)));
+  });
+  for (std::size_t i = 0; i < missing.size(); ++i) evaluators_[missing[i]] = std::move(compiled[i]);
+  b.eval.resize(bins);
+  for (std::size_t r = 0; r < bins; ++r) b.eval[r] = evaluators_.at(b.order[b.runs[r]].first).get();
+  return b;
+}
+
+void SurfaceField::values(std::span<const glm::dvec3> points, std::span<double> values) {
+  const Bins b = bin(points);
+  tbb::parallel_for(std::size_t(0), b.eval.size(), [&](std::size_t r) {
+    // Blocks of a run on this thread, in scratch on the stack: nothing allocated per run.
+    float xs[kBlock], ys[kBlock], zs[kBlock], fs[kBlock];
+    for (std::size_t at = b.runs[r]; at < b.runs[r + 1]; at += kBlock) {
+      const int count = int(std::min<std::size_t>(kBlock, b.runs[r + 1] - at));
+      for (int i = 0; i < count; ++i) {
+        const glm::dvec3& p = points[b.order[at + std::size_t(i)].second];
+        xs[i] = float(p.x), ys[i] = float(p.y), zs[i] = float(p.z);
+      }
+      b.eval[r]->field_block(xs, ys, zs, count, fs);
+      for (int i = 0; i < count; ++i) values[b.order[at + std::size_t(i)].second] = fs[i];
+    }
+  });
+}
+
+void SurfaceField::evaluate(std::span<const glm::dvec3> points, std::span<double> values, std::span<glm::dvec3> gradients) {
+  const Bins b = bin(points);
+  tbb::parallel_for(std::size_t(0), b.eval.size(), [&](std::size_t r) {
+    const std::size_t begin = b.runs[r], count = b.runs[r + 1] - begin;
+    std::vector<glm::dvec3> at(count), grad(count);
+    std::vector<double> value(count);
+    for (std::size_t i = 0; i < count; ++i) at[i] = points[b.order[begin + i].second];
+    b.eval[r]->gradient(at, value, grad);
+    for (std::size_t i = 0; i < count; ++i) {
+      values[b.order[begin + i].second] = value[i];
+      gradients[b.order[begin + i].second] = grad[i];
+    }
+  });
+}
+
+}  // namespace ht

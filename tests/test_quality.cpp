@@ -1,0 +1,165 @@
+// The quality pass (meshers/quality.hpp) as properties: on every mesh it keeps the topology
+// (closed, manifold, oriented, same Euler characteristic and components), the volume (0.5%), the
+// surface (vertex and face-centre error no worse than the extracted mesh's), never adds a
+// self-intersection, and leaves well-shaped triangles: the first percentile of the smallest angle
+// at least 25 degrees on smooth surfaces. Deterministic at any thread count.
+#include "meshers/mesh_checks.hpp"
+#include "meshers/polygonize.hpp"
+#include "nodes/mesh_leaf.hpp"
+#include "runtime/builder.hpp"
+#include "tests/support/random_tree.hpp"
+#include "tests/support/test_support.hpp"
+#include "tools/scenes.hpp"
+
+#include <glm/geometric.hpp>
+#include <gtest/gtest.h>
+#include <tbb/task_arena.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <string>
+#include <vector>
+
+namespace ht {
+namespace {
+
+constexpr double kT = 0.5;
+
+using Meshed = test::Polygonized;
+
+Meshed mesh(const Tree& t, double h, bool quality) {
+  PolygonizeOptions o;
+  o.precision = h;
+  o.quality.enabled = quality;
+  return test::polygonize_checked(t, o);
+}
+
+// The smallest angle of each triangle, degrees, sorted.
+std::vector<double> min_angles(const TriangleMesh& m) {
+  std::vector<double> out;
+  out.reserve(m.triangles.size());
+  for (const glm::uvec3& t : m.triangles) {
+    const glm::dvec3 p[3] = {m.positions[t[0]], m.positions[t[1]], m.positions[t[2]]};
+    double best = 180.0;
+    for (int k = 0; k < 3; ++k) {
+      const glm::dvec3 u = p[(k + 1) % 3] - p[k], v = p[(k + 2) % 3] - p[k];
+      best = std::min(best, std::atan2(glm::length(glm::cross(u, v)), glm::dot(u, v)) * 180.0 / 3.14159265358979323846);
+    }
+    out.push_back(best);
+  }
+  std::sort(out.begin(), out.end());
+  return out;
+}
+
+double percentile(const std::vector<double>& sorted, double q) {
+  return sorted.empty() ? 0.0 : sorted[std::min(sorted.size() - 1, std::size_t(q * double(sorted.size())))];
+}
+
+// What the pass must keep, whatever the surface.
+void expect_kept(const Meshed& off, const Meshed& on, const std::string& what) {
+  EXPECT_TRUE(on.checks.watertight()) << what;
+  EXPECT_EQ(on.checks.unused_vertices, 0u) << what;
+  EXPECT_EQ(on.checks.euler, off.checks.euler) << what;
+  EXPECT_EQ(on.checks.components, off.checks.components) << what;
+  EXPECT_NEAR(on.checks.volume, off.checks.volume, 0.005 * std::abs(off.checks.volume)) << what;
+  EXPECT_FALSE(on.stats.quality.skipped) << what;
+}
+
+TEST(Quality, SnakeTrianglesAreWellShaped) {
+  Builder b(kT);
+  const Tree t = b.build(scenes::snake(b, 120));
+  const double h = 0.065;
+  const Meshed off = mesh(t, h, false), on = mesh(t, h, true);
+  expect_kept(off, on, "snake");
+  const std::vector<double> a0 = min_angles(off.mesh), a1 = min_angles(on.mesh);
+  std::printf("snake: %zu -> %zu triangles; 1st percentile %.1f -> %.1f deg, smallest %.2f -> %.2f deg; "
+              "face error %.3g -> %.3g h; %zu collapses, %zu flips, %zu moves\n",
+              off.mesh.triangles.size(), on.mesh.triangles.size(), percentile(a0, 0.01), percentile(a1, 0.01), a0.front(),
+              a1.front(), off.checks.face_error_max / h, on.checks.face_error_max / h, on.stats.quality.collapses,
+              on.stats.quality.flips, on.stats.quality.moved);
+  // Marching tetrahedra alone: a first percentile near 1 degree (what makes the bound a test).
+  EXPECT_LT(percentile(a0, 0.01), 5.0);
+  EXPECT_GE(percentile(a1, 0.01), 25.0);
+  EXPECT_EQ(on.checks.self_intersecting_pairs, 0u);
+  EXPECT_EQ(on.checks.inverted_faces, 0u);
+  EXPECT_LE(on.checks.vertex_error_max, off.checks.vertex_error_max * 1.05 + 1e-9);
+  EXPECT_LE(on.checks.face_error_max, off.checks.face_error_max * 1.05);
+}
+
+TEST(Quality, RandomTreesKeepTopologyVolumeAndSurface) {
+  test::Rng rng = test::seeded();
+  test::RandomTreeOptions opt;
+  opt.meshes = {MeshLeaf::load(test::cgal_mesh("eight.off")), MeshLeaf::load(test::cgal_mesh("sphere.off"))};
+  int meshed = 0, smooth = 0;
+  for (int trial = 0; trial < 40; ++trial) {
+    Builder b(kT);
+    const Tree t = b.build(test::random_tree(b, rng, opt));
+    Meshed off, on;
+    try {
+      off = mesh(t, 0.06, false);
+      on = mesh(t, 0.06, true);
+    } catch (const PolygonizeError&) {
+      continue;  // an unbounded solid: tests/test_polygonize.cpp covers it
+    }
+    if (off.mesh.triangles.empty()) continue;
+    ++meshed;
+    const std::string what = "trial " + std::to_string(trial);
+    expect_kept(off, on, what);
+    EXPECT_LE(on.checks.face_error_max, off.checks.face_error_max * 1.05 + 1e-9) << what;
+    const std::vector<double> a1 = min_angles(on.mesh);
+    // Where no crease was found, every triangle is the pass's to shape.
+    // (Where creases were split, the feature step's own folds remain, with or without the pass:
+    // the open part of the quality issue.)
+    if (off.stats.crease_edges == 0 && off.stats.corner_vertices == 0) {
+      ++smooth;
+      EXPECT_GE(percentile(a1, 0.01), 25.0) << what;
+      EXPECT_EQ(off.checks.self_intersecting_pairs, 0u) << what;
+      EXPECT_EQ(on.checks.self_intersecting_pairs, 0u) << what;
+      // Inverted against -grad f: mesh leaves' gradients near their surface are issue 14's; the
+      // pass adds none.
+      EXPECT_LE(on.checks.inverted_faces, off.checks.inverted_faces) << what;
+    }
+  }
+  std::printf("%d random trees meshed, %d without creases\n", meshed, smooth);
+  EXPECT_GE(meshed, 20);
+  EXPECT_GE(smooth, 5);
+}
+
+TEST(Quality, CreasesStaySharp) {
+  // The feature step's crease points and two rings around them are the pass's constraints: the
+  // error figures of tests/test_features.cpp hold with the pass on.
+  Builder b(kT);
+  const Tree t = b.build(b.subtract({b.point({-0.2, 0, 0}, {1.0}), b.point({0.4, 0.05, 0.1}, {0.8})}, BooleanMode::MinMax));
+  for (double h : {0.04, 0.02}) {
+    const Meshed off = mesh(t, h, false), on = mesh(t, h, true);
+    expect_kept(off, on, "h=" + std::to_string(h));
+    EXPECT_GT(on.stats.crease_edges, 0u);
+    EXPECT_LT(on.checks.face_error_max, 0.1 * h) << h;
+    EXPECT_LE(on.checks.face_error_mean, off.checks.face_error_mean * 1.05) << h;
+  }
+}
+
+TEST(Quality, SameBytesAtAnyThreadCount) {
+  Builder b(kT);
+  const Tree t = b.build(scenes::snake(b, 40));
+  TriangleMesh one, two;
+  tbb::task_arena(1).execute([&] { one = mesh(t, 0.05, true).mesh; });
+  tbb::task_arena(2).execute([&] { two = mesh(t, 0.05, true).mesh; });
+  ASSERT_EQ(one.positions.size(), two.positions.size());
+  ASSERT_EQ(one.triangles.size(), two.triangles.size());
+  EXPECT_EQ(std::memcmp(one.positions.data(), two.positions.data(), one.positions.size() * sizeof(glm::dvec3)), 0);
+  EXPECT_EQ(std::memcmp(one.triangles.data(), two.triangles.data(), one.triangles.size() * sizeof(glm::uvec3)), 0);
+}
+
+TEST(Quality, OffLeavesTheExtractedMesh) {
+  Builder b(kT);
+  const Tree t = b.build(b.point({0, 0, 0}, {1.0}));
+  const Meshed off = mesh(t, 0.05, false);
+  EXPECT_EQ(off.stats.quality.collapses + off.stats.quality.flips + off.stats.quality.moved, 0u);
+  const Meshed on = mesh(t, 0.05, true);
+  EXPECT_GT(on.stats.quality.flips + on.stats.quality.collapses, 0u);
+}
+
+}  // namespace
+}  // namespace ht
