@@ -15,10 +15,11 @@ namespace {
 
 using namespace ht;
 
-void run(benchmark::State& state, const Tree& tree, double h, bool sharp = true) {
+void run(benchmark::State& state, const Tree& tree, double h, bool sharp = true, bool quality = true) {
   PolygonizeOptions o;
   o.precision = h;
   o.sharp_features = sharp;
+  o.quality.enabled = quality;
   std::size_t triangles = 0;
   PolygonizeStats stats;
   tbb::task_arena arena(static_cast<int>(state.range(1)));
@@ -26,6 +27,7 @@ void run(benchmark::State& state, const Tree& tree, double h, bool sharp = true)
   state.counters["triangles"] = static_cast<double>(triangles);
   state.counters["bricks"] = static_cast<double>(stats.bricks_active);
   state.counters["crease_edges"] = static_cast<double>(stats.crease_edges);
+  state.counters["quality_s"] = stats.quality.seconds;
   state.counters["tri_per_s"] = benchmark::Counter(static_cast<double>(triangles) * double(state.iterations()),
                                                    benchmark::Counter::kIsRate);
 }
@@ -39,6 +41,19 @@ void BM_MeshSnake(benchmark::State& state) {
 BENCHMARK(BM_MeshSnake)
     ->ArgsProduct({{650, 325}, {1, 2}})
     ->ArgNames({"h_e4", "threads"})
+    ->UseRealTime()
+    ->Unit(benchmark::kMillisecond);
+
+// The quality pass's cost (meshers/quality.hpp): the snake at h = 0.065 with it (1) and without
+// (0). Args: quality, threads.
+void BM_MeshSnakeQuality(benchmark::State& state) {
+  static Builder b(0.5);
+  static const Tree tree = b.build(scenes::snake(b, 250));
+  run(state, tree, 0.065, true, state.range(0) != 0);
+}
+BENCHMARK(BM_MeshSnakeQuality)
+    ->ArgsProduct({{0, 1}, {1, 2}})
+    ->ArgNames({"quality", "threads"})
     ->UseRealTime()
     ->Unit(benchmark::kMillisecond);
 
