@@ -452,7 +452,8 @@ TriangleMesh polygonize(std::shared_ptr<const Graph> graph, NodeId root, double 
   stats.seconds_features = seconds_since(t0);
 
   // 6. Well-shaped triangles (meshers/quality.hpp), on the bricks' own tapes; crease points stay.
-  if (options.quality.enabled) {
+  //    A patch (filtered or clipped) is the local strategies' to remesh with its bands.
+  if (options.quality.enabled && !options.brick_filter && !clipped) {
     SurfaceField field(graph, root, T, grid.origin, kCells * h);
     for (std::size_t a = 0; a < active.size(); ++a) field.adopt(grid.brick_at(active[a]), tapes[a]);
     const BatchField on_bricks = [&field](std::span<const glm::dvec3> p, std::span<double> v) { field.values(p, v); };
