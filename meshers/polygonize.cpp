@@ -463,7 +463,7 @@ TriangleMesh polygonize(std::shared_ptr<const Graph> graph, NodeId root, double 
       const std::vector<std::uint8_t> any(keep.size(), 1), near = rings_around(mesh, on_crease, any, 2);
       for (std::size_t v = 0; v < keep.size(); ++v) keep[v] |= near[v];
     }
-    improve_quality(mesh, keep, {}, on_bricks, T, h, options.quality, &stats.quality);
+    improve_quality(mesh, keep, on_bricks, T, h, options.quality, &stats.quality);
   }
   if (options.progress) options.progress(1.0);
   if (stats_out) *stats_out = stats;

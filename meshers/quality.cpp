@@ -52,21 +52,9 @@ class Improver {
   Improver(const TriangleMesh& in, std::span<const std::uint8_t> locked, const BatchField& field, double T, double h,
            const QualityOptions& options)
       : field_(field), T_(T), h_(h), o_(options) {
-    m_.request_vertex_status();
-    m_.request_edge_status();
-    m_.request_halfedge_status();
-    m_.request_face_status();
-    m_.add_property(locked_);
-    m_.add_property(origin_);
+    if (!to_openmesh(in, locked, {}, m_, locked_, origin_)) return;
     m_.add_property(slope_);
-    for (std::size_t v = 0; v < in.positions.size(); ++v) {
-      const VH vh = m_.add_vertex(om(in.positions[v]));
-      m_.property(slope_, vh) = std::nan("");
-      m_.property(locked_, vh) = !locked.empty() && locked[v];
-      m_.property(origin_, vh) = std::uint32_t(v);
-    }
-    for (const glm::uvec3& t : in.triangles)
-      if (!m_.add_face(VH(int(t[0])), VH(int(t[1])), VH(int(t[2]))).is_valid()) return;
+    for (const VH v : m_.vertices()) m_.property(slope_, v) = std::nan("");
     // An open patch keeps its rim.
     for (const VH v : m_.vertices())
       if (m_.is_boundary(v)) m_.property(locked_, v) = true;
@@ -404,26 +392,12 @@ void improve_whole(TriangleMesh& mesh, std::span<const std::uint8_t> locked, con
 
 }  // namespace
 
-void improve_quality(TriangleMesh& mesh, std::span<const std::uint8_t> locked, std::span<const std::uint8_t> region,
-                     const BatchField& field, double threshold, double h, const QualityOptions& options,
-                     QualityStats* stats) {
+void improve_quality(TriangleMesh& mesh, std::span<const std::uint8_t> locked, const BatchField& field, double threshold,
+                     double h, const QualityOptions& options, QualityStats* stats) {
   const auto t0 = std::chrono::steady_clock::now();
   QualityStats st;
   std::vector<std::uint32_t> origin;
-  if (options.enabled && !mesh.triangles.empty()) {
-    if (region.empty()) {
-      improve_whole(mesh, locked, field, threshold, h, options, st, origin);
-    } else {
-      Submesh sub = take_region(mesh, region);
-      std::vector<std::uint8_t> keep(sub.mesh.positions.size());
-      for (std::size_t v = 0; v < keep.size(); ++v) keep[v] = sub.rim[v] || (!locked.empty() && locked[sub.origin[v]]);
-      TriangleMesh part = sub.mesh;
-      improve_whole(part, keep, field, threshold, h, options, st, origin);
-      for (std::uint32_t& o : origin)
-        if (o != ~0u) o = sub.origin[o];
-      put_back(mesh, sub, part, origin);
-    }
-  }
+  if (options.enabled && !mesh.triangles.empty()) improve_whole(mesh, locked, field, threshold, h, options, st, origin);
   st.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (stats) *stats = st;
 }

@@ -45,14 +45,11 @@ struct QualityStats {
   double seconds = 0.0;
 };
 
-/// Improves the triangles of `mesh` in place. `locked` holds one flag per vertex (or is empty);
-/// `region`, when not empty, one flag per vertex too: only triangles with a corner in it change
-/// (vertices outside it are locked, and the rest of the mesh keeps its vertices bit for bit and
-/// its triangles in order). `field` is the surface's field, {field = threshold} the surface, the
-/// solid where it is larger; it is called from this thread only. `h` is the precision (world
-/// units). Vertex indices change.
-void improve_quality(TriangleMesh& mesh, std::span<const std::uint8_t> locked, std::span<const std::uint8_t> region,
-                     const BatchField& field, double threshold, double h, const QualityOptions& options = {},
-                     QualityStats* stats = nullptr);
+/// Improves the triangles of `mesh` in place. `locked` holds one flag per vertex (or is empty):
+/// those vertices stay. `field` is the surface's field, {field = threshold} the surface, the solid
+/// where it is larger; it is called from this thread only. `h` is the precision (world units).
+/// Vertex indices change.
+void improve_quality(TriangleMesh& mesh, std::span<const std::uint8_t> locked, const BatchField& field, double threshold,
+                     double h, const QualityOptions& options = {}, QualityStats* stats = nullptr);
 
 }  // namespace ht

@@ -25,20 +25,7 @@ class Remesher {
   Remesher(const TriangleMesh& sub, const std::vector<std::uint32_t>& origin, const std::vector<std::uint8_t>& locked,
            const TapeEvaluator& field, double T, double target)
       : field_(field), T_(T), L_(target) {
-    m_.request_vertex_status();
-    m_.request_edge_status();
-    m_.request_halfedge_status();
-    m_.request_face_status();
-    m_.add_property(locked_);
-    m_.add_property(origin_);
-    for (std::size_t v = 0; v < sub.positions.size(); ++v) {
-      const auto h = m_.add_vertex(om(sub.positions[v]));
-      m_.property(locked_, h) = locked[v] != 0;
-      m_.property(origin_, h) = origin[v];
-    }
-    for (const glm::uvec3& t : sub.triangles)
-      m_.add_face(TriMesh::VertexHandle(int(t[0])), TriMesh::VertexHandle(int(t[1])), TriMesh::VertexHandle(int(t[2])));
-    ok_ = m_.n_faces() == sub.triangles.size();
+    ok_ = to_openmesh(sub, locked, origin, m_, locked_, origin_);
     // Creases stay: both ends of an edge whose triangles meet at more than 30 degrees are locked.
     if (ok_)
       for (const auto e : m_.edges()) {

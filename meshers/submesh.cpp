@@ -89,6 +89,27 @@ void put_back(TriangleMesh& mesh, const Submesh& sub, const TriangleMesh& change
   for (const glm::uvec3& t : triangles) mesh.triangles.push_back({slot[t[0]], slot[t[1]], slot[t[2]]});
 }
 
+bool to_openmesh(const TriangleMesh& mesh, std::span<const std::uint8_t> locked, std::span<const std::uint32_t> origin,
+                 TriMesh& m, OpenMesh::VPropHandleT<bool>& locked_prop, OpenMesh::VPropHandleT<std::uint32_t>& origin_prop) {
+  m.request_vertex_status();
+  m.request_edge_status();
+  m.request_halfedge_status();
+  m.request_face_status();
+  m.add_property(locked_prop);
+  m.add_property(origin_prop);
+  for (std::size_t v = 0; v < mesh.positions.size(); ++v) {
+    const glm::dvec3& p = mesh.positions[v];
+    const auto h = m.add_vertex({p.x, p.y, p.z});
+    m.property(locked_prop, h) = !locked.empty() && locked[v];
+    m.property(origin_prop, h) = origin.empty() ? std::uint32_t(v) : origin[v];
+  }
+  for (const glm::uvec3& t : mesh.triangles)
+    if (!m.add_face(TriMesh::VertexHandle(int(t[0])), TriMesh::VertexHandle(int(t[1])), TriMesh::VertexHandle(int(t[2])))
+             .is_valid())
+      return false;
+  return true;
+}
+
 void from_openmesh(TriMesh& m, OpenMesh::VPropHandleT<std::uint32_t> origin, TriangleMesh& out,
                    std::vector<std::uint32_t>& origins) {
   m.garbage_collection();

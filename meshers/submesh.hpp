@@ -30,6 +30,13 @@ Submesh take_region(const TriangleMesh& mesh, std::span<const std::uint8_t> regi
 /// their order, new ones follow, unused ones are dropped; the untaken triangles come first.
 void put_back(TriangleMesh& mesh, const Submesh& sub, const TriangleMesh& changed, std::span<const std::uint32_t> origin);
 
+/// Loads `mesh` into an empty `m` for editing (vertex, edge, halfedge and face status requested,
+/// as collapses and flips need): vertex v gets locked[v] (or false) and origin[v] (or v when
+/// `origin` is empty) in the two properties, which it adds. False when OpenMesh refuses a face
+/// (the mesh is not a manifold it can hold).
+bool to_openmesh(const TriangleMesh& mesh, std::span<const std::uint8_t> locked, std::span<const std::uint32_t> origin,
+                 TriMesh& m, OpenMesh::VPropHandleT<bool>& locked_prop, OpenMesh::VPropHandleT<std::uint32_t>& origin_prop);
+
 /// A reworked OpenMesh region back in flat arrays: garbage-collects `m`, then writes its vertices
 /// and triangles in handle order and each vertex's `origin` property.
 void from_openmesh(TriMesh& m, OpenMesh::VPropHandleT<std::uint32_t> origin, TriangleMesh& out,

@@ -90,19 +90,4 @@ void SurfaceField::values(std::span<const glm::dvec3> points, std::span<double> 
   });
 }
 
-void SurfaceField::evaluate(std::span<const glm::dvec3> points, std::span<double> values, std::span<glm::dvec3> gradients) {
-  const Bins b = bin(points);
-  tbb::parallel_for(std::size_t(0), b.eval.size(), [&](std::size_t r) {
-    const std::size_t begin = b.runs[r], count = b.runs[r + 1] - begin;
-    std::vector<glm::dvec3> at(count), grad(count);
-    std::vector<double> value(count);
-    for (std::size_t i = 0; i < count; ++i) at[i] = points[b.order[begin + i].second];
-    b.eval[r]->gradient(at, value, grad);
-    for (std::size_t i = 0; i < count; ++i) {
-      values[b.order[begin + i].second] = value[i];
-      gradients[b.order[begin + i].second] = grad[i];
-    }
-  });
-}
-
 }  // namespace ht

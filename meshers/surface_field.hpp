@@ -1,4 +1,4 @@
-// f and grad f of one node near its surface, at the cost of the tapes specialized to small boxes.
+// The field of one node near its surface, at the cost of the tapes specialized to small boxes.
 //
 // The root tape of a big tree pays for every primitive at every point; the polygonizer instead
 // specializes a tape to each brick it meshes (runtime/tape.hpp), a few instructions long. The
@@ -10,7 +10,7 @@
 // A brick's tape equals the node's tape inside the brick, so the result does not depend on which
 // bricks exist; it is the same at any thread count.
 //
-// Thread safety: evaluate() runs in parallel inside but is not to be called concurrently on one
+// Thread safety: values() runs in parallel inside but is not to be called concurrently on one
 // object (it may compile bricks). Distinct objects are independent.
 #pragma once
 
@@ -42,10 +42,8 @@ class SurfaceField {
   /// Takes a tape already specialized to brick `b` (origin + b * brick, side brick).
   void adopt(glm::ivec3 b, std::shared_ptr<const Tape> tape);
 
-  /// The field at each point; values has points.size() entries. A fifth of evaluate()'s cost.
+  /// The field at each point; values has points.size() entries.
   void values(std::span<const glm::dvec3> points, std::span<double> values);
-  /// The field and its gradient at each point; values and gradients have points.size() entries.
-  void evaluate(std::span<const glm::dvec3> points, std::span<double> values, std::span<glm::dvec3> gradients);
 
   double threshold() const { return threshold_; }
   std::size_t bricks() const { return evaluators_.size(); }
