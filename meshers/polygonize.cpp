@@ -28,6 +28,7 @@
 namespace ht {
 namespace {
 
+constexpr int kUntangleRounds = 4;  // of sliding crease points where the feature step folded
 constexpr int kCells = 8;              // cells per brick side
 constexpr int kPoints = kCells + 1;    // grid points per brick side
 constexpr int kBrickPoints = kPoints * kPoints * kPoints;
@@ -448,6 +449,15 @@ TriangleMesh polygonize(std::shared_ptr<const Graph> graph, NodeId root, double 
     const CreaseStats crease = split_creases(mesh, normals, eval, T, h, options.features, &on_crease);
     stats.crease_edges = crease.split_edges;
     stats.corner_vertices = crease.corners;
+    // Crease points placed past their neighbours' fold triangles into each other: where pieces
+    // intersect, the crease points slide along their crease and the vertices away from it relax.
+    if (crease.split_edges + crease.corners > 0) {
+      Aabb near;
+      for (std::size_t v = 0; v < on_crease.size(); ++v)
+        if (on_crease[v]) near.grow(mesh.positions[v]);
+      const std::vector<std::uint8_t> none(mesh.positions.size(), 0);
+      stats.crease_intersections = untangle(mesh, none, eval, T, near.expanded(2.0 * h), kUntangleRounds, on_crease);
+    }
   }
   stats.seconds_features = seconds_since(t0);
 
@@ -463,7 +473,7 @@ TriangleMesh polygonize(std::shared_ptr<const Graph> graph, NodeId root, double 
       const std::vector<std::uint8_t> any(keep.size(), 1), near = rings_around(mesh, on_crease, any, 2);
       for (std::size_t v = 0; v < keep.size(); ++v) keep[v] |= near[v];
     }
-    improve_quality(mesh, keep, on_bricks, T, h, options.quality, &stats.quality);
+    improve_quality(mesh, keep, on_crease, on_bricks, T, h, options.quality, &stats.quality);
   }
   if (options.progress) options.progress(1.0);
   if (stats_out) *stats_out = stats;

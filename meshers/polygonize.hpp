@@ -58,6 +58,7 @@ struct PolygonizeStats {
   std::size_t bricks_total = 0, bricks_active = 0;
   std::size_t points_evaluated = 0;
   std::size_t crease_edges = 0, corner_vertices = 0;  ///< sharp features (meshers/features.hpp)
+  std::size_t crease_intersections = 0;  ///< intersecting pairs the crease step left, before the quality pass
   QualityStats quality;                               ///< the quality pass (meshers/quality.hpp)
   double seconds_classify = 0, seconds_sample = 0, seconds_extract = 0, seconds_merge = 0, seconds_features = 0;
   Aabb domain;

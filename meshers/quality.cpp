@@ -25,6 +25,8 @@ constexpr double kNeedleRatio = 0.5;                // ... when that edge is thi
 constexpr double kCoplanarCos = 0.9063077870366499; // cos 25 degrees: flips only between such faces
 constexpr double kTurnCos = 0.5;                    // cos 60 degrees: a face may not turn further
 constexpr double kKeepPlaneCos = 0.9396926207859084; // cos 20 degrees: a collapse may not turn a sound face further
+constexpr double kSpeck = 1e-3;                     // an edge this many cells long is a speck
+constexpr double kMergeFraction = 0.1;              // crease points closer than this many cells become one
 constexpr double kDegenerateCos = 0.9999619230641713; // cos 0.5 degrees: no collapse leaves a face this thin
 constexpr double kAimCos = 0.8191520442889918;      // cos 35 degrees: faces thinner than this are worked on
 constexpr double kWorseCos = 0.9659258262890683;    // cos 15 degrees: a relaxation may not leave a face thinner
@@ -49,9 +51,9 @@ glm::dvec3 unit_normal(const glm::dvec3& a, const glm::dvec3& b, const glm::dvec
 
 class Improver {
  public:
-  Improver(const TriangleMesh& in, std::span<const std::uint8_t> locked, const BatchField& field, double T, double h,
-           const QualityOptions& options)
-      : field_(field), T_(T), h_(h), o_(options) {
+  Improver(const TriangleMesh& in, std::span<const std::uint8_t> locked, std::span<const std::uint8_t> crease,
+           const BatchField& field, double T, double h, const QualityOptions& options)
+      : crease_(crease), field_(field), T_(T), h_(h), o_(options) {
     if (!to_openmesh(in, locked, {}, m_, locked_, origin_)) return;
     m_.add_property(slope_);
     for (const VH v : m_.vertices()) m_.property(slope_, v) = std::nan("");
@@ -63,6 +65,7 @@ class Improver {
   bool ok() const { return ok_; }
 
   void run(QualityStats& st) {
+    st.collapses += merge_crease_points();
     for (int it = 0; it < o_.iterations; ++it) {
       st.splits += split();
       st.collapses += collapse();
@@ -175,7 +178,9 @@ class Improver {
   // `from` at `to`'s place; 2 when one of them would turn over.
   // A needle's own normal means nothing, so faces are held to the ring's area-weighted normal,
   // which the well-shaped faces dominate.
-  double after_collapse(HH h) const {
+  // With `tiny` (the edge is a speck: vertices a thousandth of a cell apart, a cluster around a
+  // grid point the surface passes through) only faces with a shape of their own are held.
+  double after_collapse(HH h, bool tiny) const {
     const VH from = m_.from_vertex_handle(h), to = m_.to_vertex_handle(h);
     const glm::dvec3 target = p(to), ref = ring_normal(from);
     double worst = -1.0;
@@ -185,15 +190,57 @@ class Improver {
       glm::dvec3 q[3];
       for (int k = 0; k < 3; ++k) q[k] = c[k] == from ? target : p(c[k]);
       const glm::dvec3 n = unit_normal(q[0], q[1], q[2]);
-      const double thin = thinness(q[0], q[1], q[2]);
-      if (glm::dot(ref, n) < kTurnCos || thin > kDegenerateCos) return 2.0;
+      const glm::dvec3 a = p(c[0]), b = p(c[1]), d = p(c[2]);
+      const double thin = thinness(q[0], q[1], q[2]), was = thinness(a, b, d);
+      // No face gets degenerate (unless it was as thin already: a cluster's needles).
+      if (thin > kDegenerateCos && thin > was) return 2.0;
+      if (glm::dot(ref, n) < kTurnCos && !(tiny && thin > kNeedleCos)) return 2.0;
       // A face with a shape of its own keeps its plane: beside a crease, a face may not swing
       // over to the other sheet.
-      const glm::dvec3 a = p(c[0]), b = p(c[1]), d = p(c[2]);
-      if (thinness(a, b, d) < kNeedleCos && glm::dot(unit_normal(a, b, d), n) < kKeepPlaneCos) return 2.0;
+      if (was < kNeedleCos && glm::dot(unit_normal(a, b, d), n) < kKeepPlaneCos) return 2.0;
       worst = std::max(worst, thin);
     }
     return worst;
+  }
+
+  // Crease points almost together (the crease passing near where several edges' crease points
+  // meet) leave slivers turned any way between them, which fold into their neighbours: each such
+  // pair becomes one point of the crease.
+  std::size_t merge_crease_points() {
+    if (crease_.empty()) return 0;
+    std::size_t done = 0;
+    for (const EH e : m_.edges()) {
+      if (m_.status(e).deleted() || m_.calc_edge_length(e) >= kMergeFraction * h_) continue;
+      const HH h = m_.halfedge_handle(e, 0);
+      const VH a = m_.from_vertex_handle(h), b = m_.to_vertex_handle(h);
+      if (!on_crease(a) || !on_crease(b)) continue;
+      for (const HH x : {h, m_.opposite_halfedge_handle(h)}) {
+        if (m_.is_boundary(m_.from_vertex_handle(x)) || !m_.is_collapse_ok(x) || !keeps_faces(x)) continue;
+        m_.collapse(x);
+        ++done;
+        break;
+      }
+    }
+    return done;
+  }
+
+  bool on_crease(VH v) const {
+    const std::uint32_t o = m_.property(origin_, v);
+    return o != ~0u && crease_[o];
+  }
+
+  // Collapsing x turns no face around its start by more than 60 degrees and leaves none degenerate.
+  bool keeps_faces(HH x) const {
+    const VH from = m_.from_vertex_handle(x), to = m_.to_vertex_handle(x);
+    for (const FH f : m_.vf_range(from)) {
+      auto c = corners(f);
+      if (c[0] == to || c[1] == to || c[2] == to) continue;
+      glm::dvec3 q[3];
+      for (int k = 0; k < 3; ++k) q[k] = c[k] == from ? p(to) : p(c[k]);
+      if (thinness(q[0], q[1], q[2]) > kDegenerateCos) return false;
+      if (glm::dot(unit_normal(p(c[0]), p(c[1]), p(c[2])), unit_normal(q[0], q[1], q[2])) < kTurnCos) return false;
+    }
+    return true;
   }
 
   std::size_t collapse() {
@@ -223,7 +270,7 @@ class Improver {
       for (const HH h : {shortest, m_.opposite_halfedge_handle(shortest)}) {
         const VH from = m_.from_vertex_handle(h);
         if (locked(from) || near_locked(from) || !m_.is_collapse_ok(h)) continue;
-        const double a = after_collapse(h);
+        const double a = after_collapse(h, len[at] < kSpeck * h_);
         if (a <= ring_thinness(m_.from_vertex_handle(h)) && a < best_thin) best_thin = a, best = h;
       }
       if (!best.is_valid()) continue;
@@ -368,6 +415,7 @@ class Improver {
   }
 
   TriMesh m_;
+  std::span<const std::uint8_t> crease_;  // by input vertex: on a crease line
   OpenMesh::VPropHandleT<bool> locked_;
   OpenMesh::VPropHandleT<std::uint32_t> origin_;
   OpenMesh::VPropHandleT<double> slope_;  // f's derivative along the vertex normal, NaN until known
@@ -377,9 +425,10 @@ class Improver {
   bool ok_ = false;
 };
 
-void improve_whole(TriangleMesh& mesh, std::span<const std::uint8_t> locked, const BatchField& field, double T, double h,
-                   const QualityOptions& options, QualityStats& st, std::vector<std::uint32_t>& origin) {
-  Improver im(mesh, locked, field, T, h, options);
+void improve_whole(TriangleMesh& mesh, std::span<const std::uint8_t> locked, std::span<const std::uint8_t> crease,
+                   const BatchField& field, double T, double h, const QualityOptions& options, QualityStats& st,
+                   std::vector<std::uint32_t>& origin) {
+  Improver im(mesh, locked, crease, field, T, h, options);
   if (!im.ok()) {
     st.skipped = true;
     origin.resize(mesh.positions.size());
@@ -392,12 +441,13 @@ void improve_whole(TriangleMesh& mesh, std::span<const std::uint8_t> locked, con
 
 }  // namespace
 
-void improve_quality(TriangleMesh& mesh, std::span<const std::uint8_t> locked, const BatchField& field, double threshold,
-                     double h, const QualityOptions& options, QualityStats* stats) {
+void improve_quality(TriangleMesh& mesh, std::span<const std::uint8_t> locked, std::span<const std::uint8_t> crease,
+                     const BatchField& field, double threshold, double h, const QualityOptions& options,
+                     QualityStats* stats) {
   const auto t0 = std::chrono::steady_clock::now();
   QualityStats st;
   std::vector<std::uint32_t> origin;
-  if (options.enabled && !mesh.triangles.empty()) improve_whole(mesh, locked, field, threshold, h, options, st, origin);
+  if (options.enabled && !mesh.triangles.empty()) improve_whole(mesh, locked, crease, field, threshold, h, options, st, origin);
   st.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   if (stats) *stats = st;
 }

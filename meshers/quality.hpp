@@ -45,11 +45,13 @@ struct QualityStats {
   double seconds = 0.0;
 };
 
-/// Improves the triangles of `mesh` in place. `locked` holds one flag per vertex (or is empty):
-/// those vertices stay. `field` is the surface's field, {field = threshold} the surface, the solid
-/// where it is larger; it is called from this thread only. `h` is the precision (world units).
-/// Vertex indices change.
-void improve_quality(TriangleMesh& mesh, std::span<const std::uint8_t> locked, const BatchField& field, double threshold,
-                     double h, const QualityOptions& options = {}, QualityStats* stats = nullptr);
+/// Improves the triangles of `mesh` in place. `locked` and `crease` hold one flag per vertex (or
+/// are empty): locked vertices stay, and crease vertices (points on a crease line, locked too)
+/// that are almost together merge into one. `field` is the surface's field, {field = threshold}
+/// the surface, the solid where it is larger; it is called from this thread only. `h` is the
+/// precision (world units). Vertex indices change.
+void improve_quality(TriangleMesh& mesh, std::span<const std::uint8_t> locked, std::span<const std::uint8_t> crease,
+                     const BatchField& field, double threshold, double h, const QualityOptions& options = {},
+                     QualityStats* stats = nullptr);
 
 }  // namespace ht

@@ -52,6 +52,65 @@ void project(std::vector<glm::dvec3>& at, const TapeEvaluator& field, double T, 
   }
 }
 
+// Each chosen crease vertex with exactly two crease neighbours moves halfway to their midpoint:
+// along the chord of its crease, which stays within a sliver of the crease (a chord of length l
+// is at most l^2 / (8 r) from a crease of radius r), so the edge stays sharp.
+void slide_along_creases(TriangleMesh& mesh, std::span<const std::uint8_t> chosen, std::span<const std::uint8_t> fixed,
+                         std::span<const std::uint8_t> crease) {
+  std::vector<std::uint32_t> picked;
+  for (std::uint32_t v = 0; v < mesh.positions.size(); ++v)
+    if (chosen[v] && crease[v] && !fixed[v]) picked.push_back(v);
+  const Neighbours n = neighbours_of(mesh, picked);
+  std::vector<glm::dvec3> to(picked.size());
+  for (std::size_t i = 0; i < picked.size(); ++i) {
+    to[i] = mesh.positions[picked[i]];
+    std::uint32_t ends[2], count = 0;
+    for (std::uint32_t k = n.begin[i]; k < n.begin[i + 1]; ++k)
+      if (crease[n.list[k]] && count++ < 2) ends[count - 1] = n.list[k];
+    if (count == 2) to[i] = 0.5 * to[i] + 0.25 * (mesh.positions[ends[0]] + mesh.positions[ends[1]]);
+  }
+  for (std::size_t i = 0; i < picked.size(); ++i) mesh.positions[picked[i]] = to[i];
+}
+
+// The intersecting pairs among the triangles `take` accepts, as indices in `mesh`.
+template <class Take>
+std::vector<std::array<std::uint32_t, 2>> intersections_among(const TriangleMesh& mesh, Take take) {
+  TriangleMesh near;
+  std::vector<std::uint32_t> source;
+  near.positions = mesh.positions;  // unused vertices cost nothing to the search
+  for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t)
+    if (take(t)) near.triangles.push_back(mesh.triangles[t]), source.push_back(t);
+  std::vector<std::array<std::uint32_t, 2>> pairs = find_self_intersections(near, std::size_t(-1)).examples;
+  for (auto& p : pairs) p = {source[p[0]], source[p[1]]};
+  return pairs;
+}
+
+// The intersecting pairs near the vertices `hit` marks, after their triangles and one ring moved:
+// a triangle that meets a moved one has its vertices within three of the mesh's longest edges of
+// a hit vertex, so only triangles with a vertex in the cells (of that edge's size) three around
+// the hit vertices' cells are searched.
+std::vector<std::array<std::uint32_t, 2>> intersections_near(const TriangleMesh& mesh, std::span<const std::uint8_t> hit,
+                                                             double longest_edge) {
+  auto cell_of = [&](const glm::dvec3& p) { return glm::i64vec3(glm::floor(p / longest_edge)); };
+  auto key = [](glm::i64vec3 c) {
+    return std::uint64_t(c.x & 0x1fffff) | std::uint64_t(c.y & 0x1fffff) << 21 | std::uint64_t(c.z & 0x1fffff) << 42;
+  };
+  std::vector<std::uint64_t> cells;
+  for (std::size_t v = 0; v < hit.size(); ++v)
+    if (hit[v])
+      for (int dz = -3; dz <= 3; ++dz)
+        for (int dy = -3; dy <= 3; ++dy)
+          for (int dx = -3; dx <= 3; ++dx) cells.push_back(key(cell_of(mesh.positions[v]) + glm::i64vec3(dx, dy, dz)));
+  std::sort(cells.begin(), cells.end());
+  cells.erase(std::unique(cells.begin(), cells.end()), cells.end());
+  std::vector<std::uint8_t> near(mesh.positions.size(), 0);
+  for (std::size_t v = 0; v < near.size(); ++v) near[v] = std::binary_search(cells.begin(), cells.end(), key(cell_of(mesh.positions[v])));
+  return intersections_among(mesh, [&](std::uint32_t t) {
+    const glm::uvec3 tri = mesh.triangles[t];
+    return near[tri[0]] || near[tri[1]] || near[tri[2]];
+  });
+}
+
 }  // namespace
 
 void relax_boundary(TriangleMesh& mesh, const TapeEvaluator& field, double T, int iterations) {
@@ -76,34 +135,38 @@ void relax_boundary(TriangleMesh& mesh, const TapeEvaluator& field, double T, in
 }
 
 std::vector<std::array<std::uint32_t, 2>> intersections_in(const TriangleMesh& mesh, const Aabb& region) {
-  TriangleMesh near;
-  std::vector<std::uint32_t> source;
-  near.positions = mesh.positions;  // unused vertices cost nothing to the search
-  for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t) {
+  return intersections_among(mesh, [&](std::uint32_t t) {
     Aabb box;
     for (int k = 0; k < 3; ++k) box.grow(mesh.positions[mesh.triangles[t][k]]);
-    if (intersect(box, region).empty()) continue;
-    near.triangles.push_back(mesh.triangles[t]);
-    source.push_back(t);
-  }
-  std::vector<std::array<std::uint32_t, 2>> pairs = find_self_intersections(near, std::size_t(-1)).examples;
-  for (auto& p : pairs) p = {source[p[0]], source[p[1]]};
-  return pairs;
+    return !intersect(box, region).empty();
+  });
 }
 
 std::size_t untangle(TriangleMesh& mesh, std::span<const std::uint8_t> fixed, const TapeEvaluator& field, double T,
-                     const Aabb& region, int rounds) {
-  std::vector<std::uint8_t> free(mesh.positions.size());
-  for (std::size_t v = 0; v < free.size(); ++v) free[v] = !fixed[v];
+                     const Aabb& region, int rounds, std::span<const std::uint8_t> crease) {
+  std::vector<std::uint8_t> far(mesh.positions.size());
+  for (std::size_t v = 0; v < far.size(); ++v) far[v] = !fixed[v] && (crease.empty() || !crease[v]);
+  // Beside a crease, a vertex's projection may land on the other sheet and round the edge: only
+  // the crease slides there.
+  if (!crease.empty()) {
+    const std::vector<std::uint8_t> any(mesh.positions.size(), 1), beside = rings_around(mesh, crease, any, 1);
+    for (std::size_t v = 0; v < far.size(); ++v) far[v] &= !beside[v];
+  }
+  double longest = 0;
+  for (const glm::uvec3& t : mesh.triangles)
+    for (int k = 0; k < 3; ++k) longest = std::max(longest, glm::length(mesh.positions[t[k]] - mesh.positions[t[(k + 1) % 3]]));
+  // Moves reach one ring beyond the hit vertices: later rounds search only around them.
+  std::vector<std::uint8_t> hit(mesh.positions.size(), 0);
   for (int r = 0;; ++r) {
-    const auto pairs = intersections_in(mesh, region);
+    const auto pairs = r == 0 ? intersections_in(mesh, region) : intersections_near(mesh, hit, longest);
     if (pairs.empty() || r == rounds) return pairs.size();
-    std::vector<std::uint8_t> hit(mesh.positions.size(), 0);
+    std::fill(hit.begin(), hit.end(), 0);
     for (const auto& pair : pairs)
       for (std::uint32_t t : pair)
         for (int k = 0; k < 3; ++k) hit[mesh.triangles[t][k]] = 1;
-    std::vector<std::uint8_t> movable = rings_around(mesh, hit, free, 1);
-    for (std::size_t v = 0; v < movable.size(); ++v) movable[v] |= hit[v] && free[v];
+    if (!crease.empty()) slide_along_creases(mesh, hit, fixed, crease);
+    std::vector<std::uint8_t> movable = rings_around(mesh, hit, far, 1);
+    for (std::size_t v = 0; v < movable.size(); ++v) movable[v] |= hit[v] && far[v];
     relax_vertices(mesh, movable, field, T, {2, 2});
   }
 }

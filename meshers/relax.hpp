@@ -39,10 +39,12 @@ void relax_boundary(TriangleMesh& mesh, const TapeEvaluator& field, double thres
 std::vector<std::array<std::uint32_t, 2>> intersections_in(const TriangleMesh& mesh, const Aabb& region);
 
 /// Untangles a mesh locally: while some triangles in `region` intersect, their vertices and one
-/// ring around them, except the `fixed` ones, are relaxed as above. At most `rounds` rounds;
-/// returns the intersecting pairs left in the region.
+/// ring around them, except the `fixed` ones, are relaxed as above. Vertices flagged in `crease`
+/// (when not empty: points of a crease line) slide along their crease instead, toward the midpoint
+/// of their two crease neighbours. At most `rounds` rounds; returns the intersecting pairs left in
+/// the region.
 std::size_t untangle(TriangleMesh& mesh, std::span<const std::uint8_t> fixed, const TapeEvaluator& field, double threshold,
-                     const Aabb& region, int rounds = 3);
+                     const Aabb& region, int rounds = 3, std::span<const std::uint8_t> crease = {});
 
 /// The vertices within `rings` edges of a seed, reached through vertices that `allowed` accepts;
 /// the seeds themselves are not included.

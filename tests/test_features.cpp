@@ -16,6 +16,7 @@
 #include <cstdio>
 #include <functional>
 #include <sstream>
+#include <string>
 
 using namespace ht;
 
@@ -84,6 +85,26 @@ TEST(Features, CreasesComeOutSharp) {
       EXPECT_EQ(on.checks.components, off.checks.components) << what.str();
       EXPECT_NEAR(on.checks.volume, off.checks.volume, 0.01 * off.checks.volume) << what.str();
     }
+}
+
+TEST(Features, FoldedCreasePointsSlideApart) {
+  // Crease points placed past their neighbours' fold triangles into each other; sliding them
+  // along their crease (meshers/relax.hpp untangle) takes those folds out without rounding the
+  // edge (the face-error bounds above hold with it). The cropped sphere had 59 intersecting pairs
+  // at h = 0.02 before; what is left is counted honestly.
+  std::size_t left = 0;
+  for (const Scene& s : sharp_scenes())
+    for (double h : {0.04, 0.02}) {
+      Builder b(kT);
+      const Result r = mesh(b.build(s.make(b)), h, true);
+      EXPECT_EQ(r.stats.crease_intersections, r.checks.self_intersecting_pairs) << s.name << " h=" << h;
+      if (std::string(s.name) == "crop") {
+        EXPECT_EQ(r.checks.self_intersecting_pairs, 0u) << h;
+      }
+      left += r.checks.self_intersecting_pairs;
+      std::printf("%s h=%g: %zu intersecting pairs left\n", s.name, h, r.checks.self_intersecting_pairs);
+    }
+  std::printf("%zu pairs left over the crease scenes\n", left);
 }
 
 TEST(Features, GridAlignedBoxStaysWatertight) {

@@ -288,6 +288,7 @@ ht::PolygonizeStats total_polygonize(const ht::MeshResult& r) {
     s.points_evaluated += p.points_evaluated;
     s.crease_edges += p.crease_edges;
     s.corner_vertices += p.corner_vertices;
+    s.crease_intersections += p.crease_intersections;
     s.seconds_classify += p.seconds_classify;
     s.seconds_sample += p.seconds_sample;
     s.seconds_extract += p.seconds_extract;
@@ -390,7 +391,9 @@ int cmd_mesh(const MeshArgs& a) {
                    {"inverted_area", checks.inverted_area}};
     const ht::PolygonizeStats stats = total_polygonize(result);
     j["bricks"] = {{"total", stats.bricks_total}, {"active", stats.bricks_active}};
-    j["sharp_features"] = {{"crease_edges_split", stats.crease_edges}, {"corner_vertices", stats.corner_vertices}};
+    j["sharp_features"] = {{"crease_edges_split", stats.crease_edges},
+                           {"corner_vertices", stats.corner_vertices},
+                           {"intersecting_pairs_left", stats.crease_intersections}};
     j["quality"] = {{"enabled", options.polygonize.quality.enabled}, {"collapses", stats.quality.collapses},
                     {"flips", stats.quality.flips},         {"splits", stats.quality.splits},
                     {"moved", stats.quality.moved},         {"reverted", stats.quality.reverted},
