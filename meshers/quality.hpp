@@ -18,8 +18,11 @@
 // the user's meshes) neither move nor go away, and no edge between two of them is flipped or
 // collapsed, so creases stay sharp and open patches keep their rims.
 //
-// Deterministic: the topological steps visit the mesh in a fixed order on one thread, the
-// relaxation is a Jacobi step (every vertex moves from the previous positions) in parallel.
+// The mesh is cut into slabs of about 16k triangles along its longest axis; the slabs are
+// worked on in parallel with their rims locked, then the band between them (three rings wide)
+// on its own. Deterministic: the slabs depend on the mesh alone, never on the thread count; in a
+// slab the topological steps visit the mesh in a fixed order and the relaxation is a Jacobi step
+// (every vertex moves from the previous positions).
 #pragma once
 
 #include "meshers/batch_field.hpp"
@@ -48,7 +51,8 @@ struct QualityStats {
 /// Improves the triangles of `mesh` in place. `locked` and `crease` hold one flag per vertex (or
 /// are empty): locked vertices stay, and crease vertices (points on a crease line, locked too)
 /// that are almost together merge into one. `field` is the surface's field, {field = threshold}
-/// the surface, the solid where it is larger; it is called from this thread only. `h` is the
+/// the surface, the solid where it is larger; it is called from several threads at once (the
+/// pass works on slabs of the mesh in parallel, then on the bands between them). `h` is the
 /// precision (world units). Vertex indices change.
 void improve_quality(TriangleMesh& mesh, std::span<const std::uint8_t> locked, std::span<const std::uint8_t> crease,
                      const BatchField& field, double threshold, double h, const QualityOptions& options = {},

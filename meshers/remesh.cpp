@@ -206,16 +206,17 @@ void remesh_region(TriangleMesh& mesh, std::span<const std::uint8_t> region, std
   RemeshStats st;
   // Only the triangles with a corner in the region go to OpenMesh; a vertex that any other
   // triangle uses is on the rim and stays.
-  const Submesh sub = take_region(mesh, region);
+  const Pieces taken = take_region(mesh, region);
+  const Submesh& sub = taken.parts[0];
   std::vector<std::uint8_t> locked(sub.mesh.positions.size());
   for (std::size_t v = 0; v < locked.size(); ++v) locked[v] = sub.rim[v] || fixed[sub.origin[v]];
   Remesher r(sub.mesh, sub.origin, locked, field, threshold, options.target);
   if (r.ok() && !sub.mesh.triangles.empty()) {
     r.run(options.iterations, st);
-    TriangleMesh part;
-    std::vector<std::uint32_t> origin;
-    r.result(part, origin);
-    put_back(mesh, sub, part, origin);
+    std::vector<TriangleMesh> part(1);
+    std::vector<std::vector<std::uint32_t>> origin(1);
+    r.result(part[0], origin[0]);
+    put_back(mesh, taken, part, origin);
   }
   if (stats) *stats = st;
 }

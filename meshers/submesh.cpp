@@ -1,82 +1,145 @@
 #include "meshers/submesh.hpp"
 
-#include "meshers/edges.hpp"
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <array>
 
 namespace ht {
 namespace {
 
-// The taken triangles must form a manifold: where their boundary touches itself at a vertex (two
-// fans of that vertex taken, not the ones between), the whole fan of that vertex is taken too,
-// until no such vertex is left.
+// The vertices where the boundary of a set of triangles passes twice (the set touches itself
+// there, a pinch OpenMesh cannot hold), sorted: an undirected edge used once in the set is on its
+// boundary, and a vertex that two such edges leave in the set's orientation is pinched.
+std::vector<std::uint32_t> pinched_vertices(const TriangleMesh& mesh, std::span<const std::uint32_t> tris) {
+  std::vector<std::array<std::uint32_t, 3>> edges;  // {min, max, from}
+  edges.reserve(3 * tris.size());
+  for (const std::uint32_t t : tris)
+    for (int k = 0; k < 3; ++k) {
+      const std::uint32_t a = mesh.triangles[t][k], b = mesh.triangles[t][(k + 1) % 3];
+      edges.push_back({std::min(a, b), std::max(a, b), a});
+    }
+  std::sort(edges.begin(), edges.end());
+  std::vector<std::uint32_t> leaving;
+  for (std::size_t i = 0; i < edges.size();) {
+    std::size_t j = i + 1;
+    while (j < edges.size() && edges[j][0] == edges[i][0] && edges[j][1] == edges[i][1]) ++j;
+    if (j - i == 1) leaving.push_back(edges[i][2]);
+    i = j;
+  }
+  std::sort(leaving.begin(), leaving.end());
+  std::vector<std::uint32_t> pinched;
+  for (std::size_t i = 0; i + 1 < leaving.size(); ++i)
+    if (leaving[i] == leaving[i + 1] && (pinched.empty() || pinched.back() != leaving[i])) pinched.push_back(leaving[i]);
+  return pinched;
+}
+
+bool touches(const glm::uvec3& t, const std::vector<std::uint32_t>& sorted_vertices) {
+  for (int k = 0; k < 3; ++k)
+    if (std::binary_search(sorted_vertices.begin(), sorted_vertices.end(), t[k])) return true;
+  return false;
+}
+
+// The taken triangles must form a manifold: at a pinch the whole fan of the vertex is taken too,
+// until no pinch is left.
 void widen_past_pinches(const TriangleMesh& mesh, std::vector<std::uint8_t>& taken) {
   for (int round = 0; round < 8; ++round) {
-    TriangleMesh part;
-    part.positions.resize(mesh.positions.size());
+    std::vector<std::uint32_t> tris;
     for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t)
-      if (taken[t]) part.triangles.push_back(mesh.triangles[t]);
-    std::vector<std::uint8_t> out(mesh.positions.size(), 0), pinch(mesh.positions.size(), 0);
-    bool any = false;
-    for (const BoundaryEdge& e : boundary_edges(part))
-      if (++out[e.from] == 2) pinch[e.from] = 1, any = true;
-    if (!any) return;
+      if (taken[t]) tris.push_back(t);
+    const std::vector<std::uint32_t> pinched = pinched_vertices(mesh, tris);
+    if (pinched.empty()) return;
     for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
-      for (int k = 0; k < 3; ++k)
-        if (pinch[mesh.triangles[t][k]]) taken[t] = 1;
+      if (touches(mesh.triangles[t], pinched)) taken[t] = 1;
   }
 }
 
 }  // namespace
 
-Submesh take_region(const TriangleMesh& mesh, std::span<const std::uint8_t> region) {
-  const std::size_t nv = mesh.positions.size();
-  std::vector<std::uint8_t> taken(mesh.triangles.size(), 0), used_outside(nv, 0);
+Pieces take_pieces(const TriangleMesh& mesh, std::vector<std::uint32_t> piece_of, std::size_t count) {
+  const std::size_t nv = mesh.positions.size(), nt = mesh.triangles.size();
+  std::vector<std::vector<std::uint32_t>> of_part(count);
+  for (std::uint32_t t = 0; t < nt; ++t)
+    if (piece_of[t] != ~0u) of_part[piece_of[t]].push_back(t);
+  // A part pinched at a vertex gives its triangles there back, until no part is pinched.
+  tbb::parallel_for(std::size_t(0), count, [&](std::size_t i) {
+    for (int round = 0; round < 8; ++round) {
+      const std::vector<std::uint32_t> pinched = pinched_vertices(mesh, of_part[i]);
+      if (pinched.empty()) break;
+      std::erase_if(of_part[i], [&](std::uint32_t t) {
+        const bool drop = touches(mesh.triangles[t], pinched);
+        if (drop) piece_of[t] = ~0u;
+        return drop;
+      });
+    }
+  });
+  // A vertex is on a part's rim when a triangle of another part, or of none, uses it.
+  std::vector<std::uint32_t> owner(nv, ~0u);  // the one part using a vertex, or ~1u for several
+  for (std::uint32_t t = 0; t < nt; ++t)
+    for (int k = 0; k < 3; ++k) {
+      std::uint32_t& o = owner[mesh.triangles[t][k]];
+      o = o == ~0u || o == piece_of[t] ? piece_of[t] : ~1u;
+    }
+  Pieces out;
+  out.parts.resize(count);
+  for (std::uint32_t t = 0; t < nt; ++t)
+    if (piece_of[t] == ~0u) out.rest.push_back(mesh.triangles[t]);
+  std::vector<std::uint32_t> local(nv, ~0u);
+  for (std::uint32_t i = 0; i < count; ++i) {
+    Submesh& sub = out.parts[i];
+    for (const std::uint32_t t : of_part[i]) {
+      glm::uvec3 lt;
+      for (int k = 0; k < 3; ++k) {
+        const std::uint32_t v = mesh.triangles[t][k];
+        if (local[v] == ~0u) {
+          local[v] = std::uint32_t(sub.mesh.positions.size());
+          sub.mesh.positions.push_back(mesh.positions[v]);
+          sub.origin.push_back(v);
+          sub.rim.push_back(owner[v] != i);
+        }
+        lt[k] = local[v];
+      }
+      sub.mesh.triangles.push_back(lt);
+    }
+    for (const std::uint32_t v : sub.origin) local[v] = ~0u;
+  }
+  return out;
+}
+
+Pieces take_region(const TriangleMesh& mesh, std::span<const std::uint8_t> region) {
+  std::vector<std::uint8_t> taken(mesh.triangles.size(), 0);
   for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
     const glm::uvec3 tri = mesh.triangles[t];
     taken[t] = region[tri[0]] || region[tri[1]] || region[tri[2]];
   }
   widen_past_pinches(mesh, taken);
-  for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
-    if (!taken[t]) used_outside[mesh.triangles[t][0]] = used_outside[mesh.triangles[t][1]] = used_outside[mesh.triangles[t][2]] = 1;
-  Submesh sub;
-  std::vector<std::uint32_t> local(nv, ~0u);
-  for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
-    const glm::uvec3 tri = mesh.triangles[t];
-    if (!taken[t]) {
-      sub.rest.push_back(tri);
-      continue;
-    }
-    glm::uvec3 lt;
-    for (int k = 0; k < 3; ++k) {
-      const std::uint32_t v = tri[k];
-      if (local[v] == ~0u) {
-        local[v] = std::uint32_t(sub.mesh.positions.size());
-        sub.mesh.positions.push_back(mesh.positions[v]);
-        sub.origin.push_back(v);
-        sub.rim.push_back(!region[v] || used_outside[v]);
-      }
-      lt[k] = local[v];
-    }
-    sub.mesh.triangles.push_back(lt);
-  }
-  return sub;
+  std::vector<std::uint32_t> piece_of(mesh.triangles.size());
+  for (std::size_t t = 0; t < taken.size(); ++t) piece_of[t] = taken[t] ? 0u : ~0u;
+  Pieces out = take_pieces(mesh, std::move(piece_of), 1);
+  Submesh& sub = out.parts[0];
+  for (std::size_t v = 0; v < sub.rim.size(); ++v) sub.rim[v] |= !region[sub.origin[v]];
+  return out;
 }
 
-void put_back(TriangleMesh& mesh, const Submesh& sub, const TriangleMesh& changed, std::span<const std::uint32_t> origin) {
+void put_back(TriangleMesh& mesh, const Pieces& pieces, std::span<const TriangleMesh> changed,
+              std::span<const std::vector<std::uint32_t>> origin, std::vector<std::uint32_t>* renumber) {
+  const std::size_t old_count = mesh.positions.size();
   std::vector<glm::dvec3> positions = std::move(mesh.positions);
-  std::vector<std::uint32_t> index(changed.positions.size());
-  for (std::size_t v = 0; v < changed.positions.size(); ++v) {
-    std::uint32_t o = origin[v];
-    if (o == ~0u) {
-      o = std::uint32_t(positions.size());
-      positions.push_back(changed.positions[v]);
-    } else {
-      positions[o] = changed.positions[v];
+  std::vector<glm::uvec3> triangles = pieces.rest;
+  for (std::size_t i = 0; i < changed.size(); ++i) {
+    std::vector<std::uint32_t> index(changed[i].positions.size());
+    for (std::size_t v = 0; v < changed[i].positions.size(); ++v) {
+      std::uint32_t o = origin[i][v];
+      if (o == ~0u) {
+        o = std::uint32_t(positions.size());
+        positions.push_back(changed[i].positions[v]);
+      } else {
+        positions[o] = changed[i].positions[v];
+      }
+      index[v] = o;
     }
-    index[v] = o;
+    for (const glm::uvec3& t : changed[i].triangles) triangles.push_back({index[t[0]], index[t[1]], index[t[2]]});
   }
-  std::vector<glm::uvec3> triangles = sub.rest;
-  triangles.reserve(sub.rest.size() + changed.triangles.size());
-  for (const glm::uvec3& t : changed.triangles) triangles.push_back({index[t[0]], index[t[1]], index[t[2]]});
   // Vertices collapsed away leave unused slots: compact, keeping the order.
   std::vector<std::uint32_t> slot(positions.size(), ~0u);
   for (const glm::uvec3& t : triangles)
@@ -87,6 +150,7 @@ void put_back(TriangleMesh& mesh, const Submesh& sub, const TriangleMesh& change
   mesh.triangles.clear();
   mesh.triangles.reserve(triangles.size());
   for (const glm::uvec3& t : triangles) mesh.triangles.push_back({slot[t[0]], slot[t[1]], slot[t[2]]});
+  if (renumber) renumber->assign(slot.begin(), slot.begin() + std::ptrdiff_t(old_count));
 }
 
 bool to_openmesh(const TriangleMesh& mesh, std::span<const std::uint8_t> locked, std::span<const std::uint32_t> origin,

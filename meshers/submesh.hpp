@@ -15,20 +15,31 @@ namespace ht {
 struct Submesh {
   TriangleMesh mesh;                  ///< the triangles taken, their vertices numbered anew
   std::vector<std::uint32_t> origin;  ///< each taken vertex's index in the whole mesh
-  /// Taken vertices that must stay: outside the region, or used by a triangle not taken too.
+  /// Taken vertices that must stay: used by a triangle not taken too (or outside the region).
   std::vector<std::uint8_t> rim;
-  std::vector<glm::uvec3> rest;       ///< the triangles not taken, in their order
 };
 
-/// Takes the triangles with a corner in `region` (one flag per vertex). Where the taken
-/// triangles would touch themselves at a vertex (a pinch OpenMesh cannot hold), the whole fan of
-/// that vertex is taken too.
-Submesh take_region(const TriangleMesh& mesh, std::span<const std::uint8_t> region);
+/// Disjoint parts of a mesh taken out at once, and the triangles no part took, in their order.
+struct Pieces {
+  std::vector<Submesh> parts;
+  std::vector<glm::uvec3> rest;
+};
 
-/// Puts the reworked region back. `changed` is the region after the work and `origin` gives each
-/// of its vertices' index in the whole mesh, or ~0u for a new vertex. Surviving vertices keep
-/// their order, new ones follow, unused ones are dropped; the untaken triangles come first.
-void put_back(TriangleMesh& mesh, const Submesh& sub, const TriangleMesh& changed, std::span<const std::uint32_t> origin);
+/// Takes the triangles with a corner in `region` (one flag per vertex) as one part. Where the
+/// taken triangles would touch themselves at a vertex (a pinch OpenMesh cannot hold), the whole
+/// fan of that vertex is taken too.
+Pieces take_region(const TriangleMesh& mesh, std::span<const std::uint8_t> region);
+
+/// Takes `count` parts: triangle t goes to part piece_of[t], or stays in `rest` when that is ~0u.
+/// Where a part would touch itself at a vertex, its triangles at that vertex stay in `rest`.
+Pieces take_pieces(const TriangleMesh& mesh, std::vector<std::uint32_t> piece_of, std::size_t count);
+
+/// Puts the reworked parts back. changed[i] is part i after the work and origin[i] gives each of
+/// its vertices' index in the whole mesh, or ~0u for a new vertex. Surviving vertices keep their
+/// order, new ones follow in part order, unused ones are dropped; the untaken triangles come
+/// first, then each part's. With `renumber`, receives each old vertex's new index (~0u: dropped).
+void put_back(TriangleMesh& mesh, const Pieces& pieces, std::span<const TriangleMesh> changed,
+              std::span<const std::vector<std::uint32_t>> origin, std::vector<std::uint32_t>* renumber = nullptr);
 
 /// Loads `mesh` into an empty `m` for editing (vertex, edge, halfedge and face status requested,
 /// as collapses and flips need): vertex v gets locked[v] (or false) and origin[v] (or v when

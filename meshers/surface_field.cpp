@@ -8,7 +8,9 @@
 
 #include <algorithm>
 #include <cmath>
+#include <mutex>
 #include <numeric>
+#include <shared_mutex>
 #include <vector>
 
 namespace ht {
@@ -36,6 +38,7 @@ SurfaceField::SurfaceField(std::shared_ptr<const Graph> graph, NodeId root, doub
 SurfaceField::~SurfaceField() = default;
 
 void SurfaceField::adopt(glm::ivec3 b, std::shared_ptr<const Tape> tape) {
+  const std::unique_lock lock(mutex_);
   evaluators_[pack(glm::i64vec3(b))] = std::make_unique<TapeEvaluator>(std::move(tape));
 }
 
@@ -56,10 +59,14 @@ SurfaceField::Bins SurfaceField::bin(std::span<const glm::dvec3> points) {
     if (i == 0 || b.order[i].first != b.order[i - 1].first) b.runs.push_back(i);
   b.runs.push_back(n);
   const std::size_t bins = b.runs.size() - 1;
-  // Compile the bricks met for the first time, in parallel, then file them in order.
+  // Compile the bricks met for the first time, in parallel, then file them in order. A brick's
+  // tape depends only on the brick, so two callers compiling the same one file equal tapes.
   std::vector<std::uint64_t> missing;
-  for (std::size_t r = 0; r < bins; ++r)
-    if (!evaluators_.count(b.order[b.runs[r]].first)) missing.push_back(b.order[b.runs[r]].first);
+  {
+    const std::shared_lock lock(mutex_);
+    for (std::size_t r = 0; r < bins; ++r)
+      if (!evaluators_.count(b.order[b.runs[r]].first)) missing.push_back(b.order[b.runs[r]].first);
+  }
   std::vector<std::unique_ptr<TapeEvaluator>> compiled(missing.size());
   tbb::parallel_for(std::size_t(0), missing.size(), [&](std::size_t i) {
     const glm::dvec3 lo = origin_ + glm::dvec3(unpack(missing[i])) * brick_;
@@ -67,9 +74,19 @@ SurfaceField::Bins SurfaceField::bin(std::span<const glm::dvec3> points) {
     compiled[i] = std::make_unique<TapeEvaluator>(
         std::make_shared<const Tape>(compile_tape(graph_, root_, threshold_, &box, under_blend_)));
   });
-  for (std::size_t i = 0; i < missing.size(); ++i) evaluators_[missing[i]] = std::move(compiled[i]);
+  // Evaluators are never erased and the map's nodes do not move: the pointers outlive the lock.
   b.eval.resize(bins);
-  for (std::size_t r = 0; r < bins; ++r) b.eval[r] = evaluators_.at(b.order[b.runs[r]].first).get();
+  auto resolve = [&] {
+    for (std::size_t r = 0; r < bins; ++r) b.eval[r] = evaluators_.at(b.order[b.runs[r]].first).get();
+  };
+  if (missing.empty()) {
+    const std::shared_lock lock(mutex_);
+    resolve();
+  } else {
+    const std::unique_lock lock(mutex_);
+    for (std::size_t i = 0; i < missing.size(); ++i) evaluators_.try_emplace(missing[i], std::move(compiled[i]));
+    resolve();
+  }
   return b;
 }
 

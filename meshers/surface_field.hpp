@@ -10,8 +10,8 @@
 // A brick's tape equals the node's tape inside the brick, so the result does not depend on which
 // bricks exist; it is the same at any thread count.
 //
-// Thread safety: values() runs in parallel inside but is not to be called concurrently on one
-// object (it may compile bricks). Distinct objects are independent.
+// Thread safety: values() runs in parallel inside and may be called from several threads at
+// once (bricks met for the first time are compiled outside a lock and filed under it).
 #pragma once
 
 #include "runtime/graph.hpp"
@@ -20,6 +20,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <shared_mutex>
 #include <span>
 #include <unordered_map>
 #include <vector>
@@ -46,7 +47,10 @@ class SurfaceField {
   void values(std::span<const glm::dvec3> points, std::span<double> values);
 
   double threshold() const { return threshold_; }
-  std::size_t bricks() const { return evaluators_.size(); }
+  std::size_t bricks() const {
+    const std::shared_lock lock(mutex_);
+    return evaluators_.size();
+  }
 
  private:
   /// Points sorted by brick, the runs of each brick, and each run's evaluator (compiled if new).
@@ -63,6 +67,7 @@ class SurfaceField {
   glm::dvec3 origin_;
   double brick_;
   bool under_blend_;
+  mutable std::shared_mutex mutex_;  // guards evaluators_
   std::unordered_map<std::uint64_t, std::unique_ptr<TapeEvaluator>> evaluators_;
 };
 
