@@ -168,23 +168,24 @@ class Improver {
     }
     std::vector<double> slopes(todo.size(), std::nan(""));
     project(mids, dirs, slopes);
+    std::size_t done = 0;
     for (std::size_t i = 0; i < todo.size(); ++i) {
-      if (std::isnan(mids[i].x)) continue;
+      if (std::isnan(mids[i].x)) continue;  // the midpoint found no surface near it
       const VH v = m_.add_vertex(om(mids[i]));
       m_.property(locked_, v) = false;
       m_.property(origin_, v) = ~0u;
       m_.property(slope_, v) = slopes[i];
       m_.split_edge(todo[i], v);
+      ++done;
     }
-    return todo.size();
+    return done;
   }
 
   // The thinness of the thinnest face around `from` that survives its collapse into `to`, with
-  // `from` at `to`'s place; 2 when one of them would turn over.
-  // A needle's own normal means nothing, so faces are held to the ring's area-weighted normal,
-  // which the well-shaped faces dominate.
-  // With `tiny` (the edge is a speck: vertices a thousandth of a cell apart, a cluster around a
-  // grid point the surface passes through) only faces with a shape of their own are held.
+  // `from` at `to`'s place; 2 when one of them would turn over. A needle's own normal means
+  // nothing, so faces are held to the ring's area-weighted normal, which the well-shaped faces
+  // dominate; with `tiny` (the edge is a speck: vertices a thousandth of a cell apart, around a
+  // grid point the surface passes through) needles are not held to it at all.
   double after_collapse(HH h, bool tiny) const {
     const VH from = m_.from_vertex_handle(h), to = m_.to_vertex_handle(h);
     const glm::dvec3 target = p(to), ref = ring_normal(from);
@@ -276,7 +277,7 @@ class Improver {
         const VH from = m_.from_vertex_handle(h);
         if (locked(from) || near_locked(from) || !m_.is_collapse_ok(h)) continue;
         const double a = after_collapse(h, len[at] < kSpeck * h_);
-        if (a <= ring_thinness(m_.from_vertex_handle(h)) && a < best_thin) best_thin = a, best = h;
+        if (a <= ring_thinness(from) && a < best_thin) best_thin = a, best = h;
       }
       if (!best.is_valid()) continue;
       m_.collapse(best);

@@ -88,9 +88,9 @@ std::vector<std::array<std::uint32_t, 2>> intersections_among(const TriangleMesh
 // The intersecting pairs near the vertices `hit` marks, after their triangles and one ring moved:
 // a triangle that meets a moved one has its vertices within three of the mesh's longest edges of
 // a hit vertex, so only triangles with a vertex in the cells (of that edge's size) three around
-// the hit vertices' cells are searched.
+// the hit vertices' cells are searched (those that meet `region`, as intersections_in does).
 std::vector<std::array<std::uint32_t, 2>> intersections_near(const TriangleMesh& mesh, std::span<const std::uint8_t> hit,
-                                                             double longest_edge) {
+                                                             double longest_edge, const Aabb& region) {
   auto cell_of = [&](const glm::dvec3& p) { return glm::i64vec3(glm::floor(p / longest_edge)); };
   auto key = [](glm::i64vec3 c) {
     return std::uint64_t(c.x & 0x1fffff) | std::uint64_t(c.y & 0x1fffff) << 21 | std::uint64_t(c.z & 0x1fffff) << 42;
@@ -107,7 +107,10 @@ std::vector<std::array<std::uint32_t, 2>> intersections_near(const TriangleMesh&
   for (std::size_t v = 0; v < near.size(); ++v) near[v] = std::binary_search(cells.begin(), cells.end(), key(cell_of(mesh.positions[v])));
   return intersections_among(mesh, [&](std::uint32_t t) {
     const glm::uvec3 tri = mesh.triangles[t];
-    return near[tri[0]] || near[tri[1]] || near[tri[2]];
+    if (!near[tri[0]] && !near[tri[1]] && !near[tri[2]]) return false;
+    Aabb box;
+    for (int k = 0; k < 3; ++k) box.grow(mesh.positions[tri[k]]);
+    return !intersect(box, region).empty();
   });
 }
 
@@ -158,7 +161,7 @@ std::size_t untangle(TriangleMesh& mesh, std::span<const std::uint8_t> fixed, co
   // Moves reach one ring beyond the hit vertices: later rounds search only around them.
   std::vector<std::uint8_t> hit(mesh.positions.size(), 0);
   for (int r = 0;; ++r) {
-    const auto pairs = r == 0 ? intersections_in(mesh, region) : intersections_near(mesh, hit, longest);
+    const auto pairs = r == 0 ? intersections_in(mesh, region) : intersections_near(mesh, hit, longest, region);
     if (pairs.empty() || r == rounds) return pairs.size();
     std::fill(hit.begin(), hit.end(), 0);
     for (const auto& pair : pairs)
