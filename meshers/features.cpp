@@ -16,6 +16,8 @@
 namespace ht {
 namespace {
 
+constexpr double kOnPlane = 0.05;  // an end this near the other end's tangent plane (in edge lengths) is on the crease
+
 double cos_degrees(double d) { return std::cos(d * std::numbers::pi / 180.0); }
 
 using Edge = std::array<std::uint32_t, 2>;  // lower index first
@@ -98,7 +100,7 @@ void mark_suspect_cells(std::span<const float> values, int cells, const FeatureO
 CreaseStats split_creases(TriangleMesh& mesh, std::span<const glm::vec3> normals, const TapeEvaluator& eval, double T,
                           double h, const FeatureOptions& options, std::vector<std::uint8_t>* on_crease) {
   CreaseStats stats;
-  if (on_crease) on_crease->assign(mesh.positions.size(), 0);
+  if (on_crease) on_crease->resize(mesh.positions.size(), 0);  // flags the caller set stay
   auto& P = mesh.positions;
   const float cos_sharp = float(cos_degrees(options.sharp_angle_degrees));
   auto known = [&](std::uint32_t v) { return normals[v] != glm::vec3(0.0f); };
@@ -171,6 +173,19 @@ CreaseStats split_creases(TriangleMesh& mesh, std::span<const glm::vec3> normals
   for (std::size_t e = 0; e < edges.size(); ++e) {
     const double g = glm::length(grads[e]);
     active[e] = plausible[e] && g > 0 && std::abs(values[e] - T) <= options.max_error * h * g;
+  }
+  // An end lying on the other end's tangent plane is on the crease already (a crease through
+  // grid points: marching tetrahedra put it there). The edge does not cross the crease, it ends
+  // on it: no split. That end is a crease point, and its normal is one sheet's only.
+  std::vector<std::uint8_t> on_line(n0, 0);
+  for (std::uint32_t e = 0; e < E; ++e) {
+    const glm::dvec3 d = P[edges[e][1]] - P[edges[e][0]];
+    const double len = glm::length(d);
+    for (int s = 0; s < 2; ++s)
+      if (std::abs(glm::dot(glm::dvec3(normals[edges[e][s]]), d)) < kOnPlane * len) {
+        on_line[edges[e][1 - s]] = 1;
+        active[e] = 0;
+      }
   }
   // A crease point near an end of its edge moves that end onto the crease instead of cutting a
   // sliver off the edge's triangles. The edges at a moved vertex then no longer cross the crease.
@@ -283,9 +298,9 @@ CreaseStats split_creases(TriangleMesh& mesh, std::span<const glm::vec3> normals
         glm::dvec3 nv(0.0);
         if (v < n0 && snap_of[v] != ~0u)
           nv = plane_normal[snap_of[v]][0] + plane_normal[snap_of[v]][1];
-        else if (v < n0)
+        else if (v < n0 && !on_line[v])  // a point on the crease has one sheet's normal only
           nv = glm::dvec3(normals[v]);
-        else if (v < n0 + E)
+        else if (v >= n0 && v < n0 + E)
           nv = plane_normal[v - n0][0] + plane_normal[v - n0][1];
         if (glm::dot(np, nv) <= 0 && glm::dot(nt, nv) > 0.25 * glm::length(nt) * glm::length(nv)) return false;
       }
@@ -374,6 +389,8 @@ CreaseStats split_creases(TriangleMesh& mesh, std::span<const glm::vec3> normals
     const int n = cut(t, with_corner, piece);
     out.insert(out.end(), piece.begin(), piece.begin() + n);
   }
+  for (std::uint32_t v = 0; v < n0; ++v)
+    if (on_line[v] && on_crease) (*on_crease)[v] = 1;
   for (std::uint32_t v = 0; v < n0; ++v)
     if (snap_of[v] != ~0u) {
       P[v] = points[snap_of[v]];

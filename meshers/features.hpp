@@ -65,8 +65,9 @@ struct CreaseStats {
 /// Splits the mesh's edges along creases. normals[v] is vertex v's outward unit normal, or zero
 /// where unknown (such vertices' edges are left alone). `eval` is a tape of the surface's field
 /// (threshold T) used to check the new points; h the precision. With `on_crease`, receives one
-/// flag per vertex of the result: set on the crease points (new and moved vertices), which later
-/// passes must keep where they are. Deterministic.
+/// flag per vertex of the result: set on the crease points (new and moved vertices, and those the
+/// caller flagged already, such as snapped grid points: meshers/snap.hpp), which later passes
+/// must keep where they are. Deterministic.
 CreaseStats split_creases(TriangleMesh& mesh, std::span<const glm::vec3> normals, const TapeEvaluator& eval,
                           double threshold, double h, const FeatureOptions& options = {},
                           std::vector<std::uint8_t>* on_crease = nullptr);

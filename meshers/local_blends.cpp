@@ -130,7 +130,7 @@ TriangleMesh close_with_bands(const std::vector<TriangleMesh>& pieces, const Tri
   }
   // Look for intersections wherever the strategy or the remeshing changed the mesh.
   changed = merge(changed.expanded(in.precision), clip);
-  st.self_intersections = untangle(out, std::vector<std::uint8_t>(out.positions.size(), 0), field, in.threshold, changed);
+  st.self_intersections = untangle(out, std::vector<std::uint8_t>(out.positions.size(), 0), field, in.threshold, changed).size();
   return out;
 }
 

@@ -6,7 +6,10 @@
 #include "meshers/features.hpp"
 #include "meshers/quality.hpp"
 #include "meshers/relax.hpp"
+#include "meshers/self_intersections.hpp"
+#include "meshers/snap.hpp"
 #include "meshers/surface_field.hpp"
+#include "meshers/unfold.hpp"
 
 #include "runtime/tape.hpp"
 #include "runtime/tape_eval.hpp"
@@ -21,6 +24,7 @@
 #include <atomic>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <numeric>
 #include <string>
 #include <vector>
@@ -28,7 +32,9 @@
 namespace ht {
 namespace {
 
-constexpr int kUntangleRounds = 4;  // of sliding crease points where the feature step folded
+constexpr double kSnap = 0.01;      // of a grid edge: a vertex this near a grid point merges there
+constexpr int kUntangleRounds = 4;
+constexpr int kUnfoldRounds = 12;  // of collapsing the folds sliding left  // of sliding crease points where the feature step folded
 constexpr int kCells = 8;              // cells per brick side
 constexpr int kPoints = kCells + 1;    // grid points per brick side
 constexpr int kBrickPoints = kPoints * kPoints * kPoints;
@@ -330,7 +336,9 @@ TriangleMesh polygonize(std::shared_ptr<const Graph> graph, NodeId root, double 
       fa[v] = std::max(double(own[a_in ? ia : ib]), T);
       fb[v] = std::min(double(own[a_in ? ib : ia]), T);
       span[v] = fa[v] - fb[v];
-      t[v] = fa[v] > fb[v] ? (fa[v] - T) / (fa[v] - fb[v]) : 0.5;
+      // An inside end exactly at T (a face through the grid point) says nothing of where the
+      // solid ends along the edge: bisect there.
+      t[v] = fa[v] > T && fa[v] > fb[v] ? (fa[v] - T) / (fa[v] - fb[v]) : 0.5;
     }
     // Illinois false position, the brick's unconverged vertices per batch. Most converge in a
     // few steps; those next to a crease of a min/max field need more.
@@ -367,10 +375,12 @@ TriangleMesh polygonize(std::shared_ptr<const Graph> graph, NodeId root, double 
           fa[v] = T + 0.5 * (fa[v] - T);
         }
         // Done when f - T, or the bracket, is a small fraction of the change across the edge.
+        // A value exactly T is a plateau of the surface along the edge (a crease line on it): the
+        // crossing is where the plateau ends, found by bisection.
         const double tol = options.refine_tolerance;
-        const bool converged = std::abs(f - T) <= tol * span[v] || tb[v] - ta[v] <= tol;
+        const bool converged = (f != T && std::abs(f - T) <= tol * span[v]) || tb[v] - ta[v] <= tol;
         if (converged) continue;  // t[v] is the last point evaluated
-        t[v] = fa[v] > fb[v] ? ta[v] + (fa[v] - T) / (fa[v] - fb[v]) * (tb[v] - ta[v]) : 0.5 * (ta[v] + tb[v]);
+        t[v] = fa[v] > T && fa[v] > fb[v] ? ta[v] + (fa[v] - T) / (fa[v] - fb[v]) * (tb[v] - ta[v]) : 0.5 * (ta[v] + tb[v]);
         live[kept++] = v;
       }
       live.resize(kept);
@@ -436,16 +446,43 @@ TriangleMesh polygonize(std::shared_ptr<const Graph> graph, NodeId root, double 
   };
   for (const BrickOutput& o : outputs)
     for (const auto& tri : o.triangles) mesh.triangles.push_back({id(tri[0]), id(tri[1]), id(tri[2])});
+  std::vector<glm::vec3> normals(all.size());
+  for (std::size_t i = 0; i < all.size(); ++i) normals[i] = all[i].normal;
+  std::shared_ptr<const TapeEvaluator> root_eval;
+  auto root_field = [&]() -> const TapeEvaluator& {
+    if (!root_eval) root_eval = std::make_shared<const TapeEvaluator>(std::make_shared<const Tape>(compile_tape(graph, root, T)));
+    return *root_eval;
+  };
+  std::vector<std::uint8_t> snapped;  // merged vertices put on a crease or a corner
+  {
+    const SnapOptions snap_options{options.features.sharp_angle_degrees, options.features.max_error};
+    // Vertices a hair from a grid point (a surface through grid points: faces on grid planes)
+    // merge into one there (meshers/snap.hpp).
+    std::vector<std::uint64_t> near(all.size(), ~std::uint64_t(0));
+    std::size_t count = 0;
+    for (std::size_t i = 0; i < all.size(); ++i) {
+      const std::uint64_t lower = all[i].key / 8, dir = all[i].key % 8;
+      const glm::i64vec3 lp(std::int64_t(lower % std::uint64_t(grid.points.x)),
+                            std::int64_t((lower / std::uint64_t(grid.points.x)) % std::uint64_t(grid.points.y)),
+                            std::int64_t(lower / std::uint64_t(grid.points.x * grid.points.y)));
+      const glm::i64vec3 d(std::int64_t(dir & 1), std::int64_t((dir >> 1) & 1), std::int64_t((dir >> 2) & 1));
+      const glm::dvec3 dd(d);
+      const double s = glm::dot(all[i].position - grid.position(lp), dd) / (glm::dot(dd, dd) * h);
+      if (s < kSnap) near[i] = lower;
+      else if (s > 1.0 - kSnap) near[i] = grid.point_index(lp + d);
+      count += near[i] != ~std::uint64_t(0);
+    }
+    if (count > 0 && options.snap) snap_to_grid_points(mesh, near, normals, snapped, root_field(), T, h, snap_options, &stats.snap);
+  }
   stats.seconds_merge = seconds_since(t0);
 
   // 5. Creases: split the edges that cross them (meshers/features.hpp).
   t0 = std::chrono::steady_clock::now();
-  std::vector<glm::vec3> normals(all.size());
   bool any_normal = false;
-  for (std::size_t i = 0; i < all.size(); ++i) any_normal |= (normals[i] = all[i].normal) != glm::vec3(0.0f);
-  std::vector<std::uint8_t> on_crease;
+  for (const glm::vec3& n : normals) any_normal |= n != glm::vec3(0.0f);
+  std::vector<std::uint8_t> on_crease = snapped;
   if (any_normal) {
-    const TapeEvaluator eval(std::make_shared<const Tape>(compile_tape(graph, root, T)));
+    const TapeEvaluator& eval = root_field();
     const CreaseStats crease = split_creases(mesh, normals, eval, T, h, options.features, &on_crease);
     stats.crease_edges = crease.split_edges;
     stats.corner_vertices = crease.corners;
@@ -456,7 +493,13 @@ TriangleMesh polygonize(std::shared_ptr<const Graph> graph, NodeId root, double 
       for (std::size_t v = 0; v < on_crease.size(); ++v)
         if (on_crease[v]) near.grow(mesh.positions[v]);
       const std::vector<std::uint8_t> none(mesh.positions.size(), 0);
-      stats.crease_intersections = untangle(mesh, none, eval, T, near.expanded(2.0 * h), kUntangleRounds, on_crease);
+      const auto left = untangle(mesh, none, eval, T, near.expanded(2.0 * h), kUntangleRounds, on_crease);
+      stats.crease_intersections = left.size();
+      // What sliding left, collapses take away (meshers/unfold.hpp).
+      if (!left.empty()) {
+        stats.unfold = unfold(mesh, on_crease, left, kUnfoldRounds);
+        stats.crease_intersections = stats.unfold.pairs_after;
+      }
     }
   }
   stats.seconds_features = seconds_since(t0);
@@ -473,7 +516,20 @@ TriangleMesh polygonize(std::shared_ptr<const Graph> graph, NodeId root, double 
       const std::vector<std::uint8_t> any(keep.size(), 1), near = rings_around(mesh, on_crease, any, 2);
       for (std::size_t v = 0; v < keep.size(); ++v) keep[v] |= near[v];
     }
-    improve_quality(mesh, keep, on_crease, on_bricks, T, h, options.quality, &stats.quality);
+    std::vector<std::uint8_t> crease_after;
+    improve_quality(mesh, keep, on_crease, on_bricks, T, h, options.quality, &stats.quality, &crease_after);
+    // A move can push a face through a sheet close by (a thin wing, two sheets beside a crease):
+    // what the pass left intersecting is collapsed away too.
+    {
+      auto left = find_self_intersections(mesh, std::numeric_limits<std::size_t>::max()).examples;
+      stats.quality_intersections = stats.crease_intersections = left.size();
+      if (!left.empty()) {
+        const UnfoldStats more = unfold(mesh, crease_after, std::move(left), kUnfoldRounds);
+        stats.unfold.collapses += more.collapses;
+        stats.unfold.seconds += more.seconds;
+        stats.crease_intersections = more.pairs_after;
+      }
+    }
   }
   if (options.progress) options.progress(1.0);
   if (stats_out) *stats_out = stats;

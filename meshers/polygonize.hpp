@@ -18,6 +18,8 @@
 
 #include "meshers/features.hpp"
 #include "meshers/quality.hpp"
+#include "meshers/snap.hpp"
+#include "meshers/unfold.hpp"
 #include "meshers/triangle_mesh.hpp"
 #include "runtime/aabb.hpp"
 #include "runtime/graph.hpp"
@@ -38,6 +40,7 @@ struct PolygonizeOptions {
   /// bracket below this fraction of the edge.
   double refine_tolerance = 1e-3;
   bool sharp_features = true;                    ///< split edges along creases (meshers/features.hpp)
+  bool snap = true;                              ///< merge the vertices a hair from a grid point into one (meshers/snap.hpp)
   FeatureOptions features;
   /// The quality pass over the extracted mesh (meshers/quality.hpp); on by default.
   QualityOptions quality;
@@ -58,7 +61,10 @@ struct PolygonizeStats {
   std::size_t bricks_total = 0, bricks_active = 0;
   std::size_t points_evaluated = 0;
   std::size_t crease_edges = 0, corner_vertices = 0;  ///< sharp features (meshers/features.hpp)
-  std::size_t crease_intersections = 0;  ///< intersecting pairs the crease step left, before the quality pass
+  std::size_t crease_intersections = 0;  ///< intersecting pairs left where the crease step ran (after unfolding)
+  std::size_t quality_intersections = 0; ///< of those, pairs the quality pass made (then unfolded)
+  UnfoldStats unfold;                                 ///< folds the crease step left, collapsed (meshers/unfold.hpp)
+  SnapStats snap;                                     ///< vertices merged at grid points (meshers/snap.hpp)
   QualityStats quality;                               ///< the quality pass (meshers/quality.hpp)
   double seconds_classify = 0, seconds_sample = 0, seconds_extract = 0, seconds_merge = 0, seconds_features = 0;
   Aabb domain;

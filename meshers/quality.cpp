@@ -493,9 +493,10 @@ void improve_pieces(TriangleMesh& mesh, const Pieces& pieces, std::span<const st
 
 void improve_quality(TriangleMesh& mesh, std::span<const std::uint8_t> locked, std::span<const std::uint8_t> crease,
                      const BatchField& field, double threshold, double h, const QualityOptions& options,
-                     QualityStats* stats) {
+                     QualityStats* stats, std::vector<std::uint8_t>* crease_after) {
   const auto t0 = std::chrono::steady_clock::now();
   QualityStats st;
+  if (crease_after) crease_after->assign(crease.begin(), crease.end());
   if (options.enabled && !mesh.triangles.empty()) {
     // Slabs first, in parallel, their rims locked; then the band of triangles between slabs.
     const std::size_t count = std::clamp<std::size_t>(mesh.triangles.size() / kPieceTriangles, 1, kMaxPieces);
@@ -510,15 +511,16 @@ void improve_quality(TriangleMesh& mesh, std::span<const std::uint8_t> locked, s
     for (const glm::uvec3& t : pieces.rest) band[t[0]] = band[t[1]] = band[t[2]] = 1;
     std::vector<std::uint32_t> renumber;
     improve_pieces(mesh, pieces, locked, crease, field, threshold, h, options, st, renumber);
+    // The band's vertices were rims, locked: they survive, under new indices.
+    auto moved = [&](std::span<const std::uint8_t> flags) {
+      std::vector<std::uint8_t> out(mesh.positions.size(), 0);
+      if (!flags.empty())
+        for (std::size_t v = 0; v < renumber.size(); ++v)
+          if (renumber[v] != ~0u) out[renumber[v]] = flags[v];
+      return out;
+    };
+    if (crease_after && !crease.empty()) *crease_after = moved(crease);
     if (!pieces.rest.empty()) {
-      // The band's vertices were rims, locked: they survive, under new indices.
-      auto moved = [&](std::span<const std::uint8_t> flags) {
-        std::vector<std::uint8_t> out(mesh.positions.size(), 0);
-        if (!flags.empty())
-          for (std::size_t v = 0; v < renumber.size(); ++v)
-            if (renumber[v] != ~0u) out[renumber[v]] = flags[v];
-        return out;
-      };
       // Three rings around it: the slabs' rims and their neighbours did not move, nor will a
       // region's rim and its neighbours.
       std::vector<std::uint8_t> region = moved(band);
@@ -526,6 +528,7 @@ void improve_quality(TriangleMesh& mesh, std::span<const std::uint8_t> locked, s
       for (std::size_t v = 0; v < region.size(); ++v) region[v] |= around[v];
       const std::vector<std::uint8_t> locked2 = moved(locked), crease2 = moved(crease);
       improve_pieces(mesh, take_region(mesh, region), locked2, crease2, field, threshold, h, options, st, renumber);
+      if (crease_after && !crease.empty()) *crease_after = moved(crease2);
     }
   }
   st.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

@@ -53,9 +53,10 @@ struct QualityStats {
 /// that are almost together merge into one. `field` is the surface's field, {field = threshold}
 /// the surface, the solid where it is larger; it is called from several threads at once (the
 /// pass works on slabs of the mesh in parallel, then on the bands between them). `h` is the
-/// precision (world units). Vertex indices change.
+/// precision (world units). Vertex indices change; with `crease_after`, receives the crease flags
+/// renumbered with them.
 void improve_quality(TriangleMesh& mesh, std::span<const std::uint8_t> locked, std::span<const std::uint8_t> crease,
                      const BatchField& field, double threshold, double h, const QualityOptions& options = {},
-                     QualityStats* stats = nullptr);
+                     QualityStats* stats = nullptr, std::vector<std::uint8_t>* crease_after = nullptr);
 
 }  // namespace ht

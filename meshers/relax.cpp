@@ -85,6 +85,44 @@ std::vector<std::array<std::uint32_t, 2>> intersections_among(const TriangleMesh
   return pairs;
 }
 
+}  // namespace
+
+void relax_boundary(TriangleMesh& mesh, const TapeEvaluator& field, double T, int iterations) {
+  const auto loops = boundary_loops(mesh);
+  std::vector<std::uint8_t> on_loop(mesh.positions.size(), 0), all(mesh.positions.size(), 1);
+  for (const auto& l : loops)
+    for (std::uint32_t v : l) on_loop[v] = 1;
+  const std::vector<std::uint8_t> behind = rings_around(mesh, on_loop, all, 1);
+  for (int it = 0; it < iterations; ++it) {
+    for (const auto& l : loops) {
+      std::vector<glm::dvec3> at(l.size());
+      for (std::size_t k = 0; k < l.size(); ++k) {
+        const glm::dvec3 p = mesh.positions[l[k]];
+        const glm::dvec3 mid = 0.5 * (mesh.positions[l[(k + 1) % l.size()]] + mesh.positions[l[(k + l.size() - 1) % l.size()]]);
+        at[k] = p + 0.5 * (mid - p);
+      }
+      project(at, field, T, 2);
+      for (std::size_t k = 0; k < l.size(); ++k) mesh.positions[l[k]] = at[k];
+    }
+    relax_vertices(mesh, behind, field, T, {1, 2});
+  }
+}
+
+double longest_edge(const TriangleMesh& mesh) {
+  double longest = 0;
+  for (const glm::uvec3& t : mesh.triangles)
+    for (int k = 0; k < 3; ++k) longest = std::max(longest, glm::length(mesh.positions[t[k]] - mesh.positions[t[(k + 1) % 3]]));
+  return longest;
+}
+
+std::vector<std::array<std::uint32_t, 2>> intersections_in(const TriangleMesh& mesh, const Aabb& region) {
+  return intersections_among(mesh, [&](std::uint32_t t) {
+    Aabb box;
+    for (int k = 0; k < 3; ++k) box.grow(mesh.positions[mesh.triangles[t][k]]);
+    return !intersect(box, region).empty();
+  });
+}
+
 // The intersecting pairs near the vertices `hit` marks, after their triangles and one ring moved:
 // a triangle that meets a moved one has its vertices within three of the mesh's longest edges of
 // a hit vertex, so only triangles with a vertex in the cells (of that edge's size) three around
@@ -114,39 +152,9 @@ std::vector<std::array<std::uint32_t, 2>> intersections_near(const TriangleMesh&
   });
 }
 
-}  // namespace
-
-void relax_boundary(TriangleMesh& mesh, const TapeEvaluator& field, double T, int iterations) {
-  const auto loops = boundary_loops(mesh);
-  std::vector<std::uint8_t> on_loop(mesh.positions.size(), 0), all(mesh.positions.size(), 1);
-  for (const auto& l : loops)
-    for (std::uint32_t v : l) on_loop[v] = 1;
-  const std::vector<std::uint8_t> behind = rings_around(mesh, on_loop, all, 1);
-  for (int it = 0; it < iterations; ++it) {
-    for (const auto& l : loops) {
-      std::vector<glm::dvec3> at(l.size());
-      for (std::size_t k = 0; k < l.size(); ++k) {
-        const glm::dvec3 p = mesh.positions[l[k]];
-        const glm::dvec3 mid = 0.5 * (mesh.positions[l[(k + 1) % l.size()]] + mesh.positions[l[(k + l.size() - 1) % l.size()]]);
-        at[k] = p + 0.5 * (mid - p);
-      }
-      project(at, field, T, 2);
-      for (std::size_t k = 0; k < l.size(); ++k) mesh.positions[l[k]] = at[k];
-    }
-    relax_vertices(mesh, behind, field, T, {1, 2});
-  }
-}
-
-std::vector<std::array<std::uint32_t, 2>> intersections_in(const TriangleMesh& mesh, const Aabb& region) {
-  return intersections_among(mesh, [&](std::uint32_t t) {
-    Aabb box;
-    for (int k = 0; k < 3; ++k) box.grow(mesh.positions[mesh.triangles[t][k]]);
-    return !intersect(box, region).empty();
-  });
-}
-
-std::size_t untangle(TriangleMesh& mesh, std::span<const std::uint8_t> fixed, const TapeEvaluator& field, double T,
-                     const Aabb& region, int rounds, std::span<const std::uint8_t> crease) {
+std::vector<std::array<std::uint32_t, 2>> untangle(TriangleMesh& mesh, std::span<const std::uint8_t> fixed,
+                                                   const TapeEvaluator& field, double T, const Aabb& region, int rounds,
+                                                   std::span<const std::uint8_t> crease) {
   std::vector<std::uint8_t> far(mesh.positions.size());
   for (std::size_t v = 0; v < far.size(); ++v) far[v] = !fixed[v] && (crease.empty() || !crease[v]);
   // Beside a crease, a vertex's projection may land on the other sheet and round the edge: only
@@ -155,14 +163,12 @@ std::size_t untangle(TriangleMesh& mesh, std::span<const std::uint8_t> fixed, co
     const std::vector<std::uint8_t> any(mesh.positions.size(), 1), beside = rings_around(mesh, crease, any, 1);
     for (std::size_t v = 0; v < far.size(); ++v) far[v] &= !beside[v];
   }
-  double longest = 0;
-  for (const glm::uvec3& t : mesh.triangles)
-    for (int k = 0; k < 3; ++k) longest = std::max(longest, glm::length(mesh.positions[t[k]] - mesh.positions[t[(k + 1) % 3]]));
+  const double longest = longest_edge(mesh);
   // Moves reach one ring beyond the hit vertices: later rounds search only around them.
   std::vector<std::uint8_t> hit(mesh.positions.size(), 0);
   for (int r = 0;; ++r) {
     const auto pairs = r == 0 ? intersections_in(mesh, region) : intersections_near(mesh, hit, longest, region);
-    if (pairs.empty() || r == rounds) return pairs.size();
+    if (pairs.empty() || r == rounds) return pairs;
     std::fill(hit.begin(), hit.end(), 0);
     for (const auto& pair : pairs)
       for (std::uint32_t t : pair)

@@ -38,13 +38,25 @@ void relax_boundary(TriangleMesh& mesh, const TapeEvaluator& field, double thres
 /// strategy changed the mesh: the rest is the operands' own), as pairs of triangle indices.
 std::vector<std::array<std::uint32_t, 2>> intersections_in(const TriangleMesh& mesh, const Aabb& region);
 
+/// The intersecting pairs among the triangles near the vertices `hit` marks, after those vertices'
+/// triangles and one ring around them changed: a triangle that meets a changed one has its
+/// vertices within three `longest_edge` lengths of a hit vertex, so only the triangles with a
+/// vertex in the cells (of that size) three around the hit vertices' cells, and whose boxes meet
+/// `region`, are searched.
+std::vector<std::array<std::uint32_t, 2>> intersections_near(const TriangleMesh& mesh, std::span<const std::uint8_t> hit,
+                                                             double longest_edge, const Aabb& region);
+
+/// The length of the mesh's longest edge.
+double longest_edge(const TriangleMesh& mesh);
+
 /// Untangles a mesh locally: while some triangles in `region` intersect, their vertices and one
 /// ring around them, except the `fixed` ones, are relaxed as above. Vertices flagged in `crease`
 /// (when not empty: points of a crease line) slide along their crease instead, toward the midpoint
 /// of their two crease neighbours. At most `rounds` rounds; returns the intersecting pairs left in
-/// the region.
-std::size_t untangle(TriangleMesh& mesh, std::span<const std::uint8_t> fixed, const TapeEvaluator& field, double threshold,
-                     const Aabb& region, int rounds = 3, std::span<const std::uint8_t> crease = {});
+/// the region (triangle indices, lower first).
+std::vector<std::array<std::uint32_t, 2>> untangle(TriangleMesh& mesh, std::span<const std::uint8_t> fixed,
+                                                   const TapeEvaluator& field, double threshold, const Aabb& region,
+                                                   int rounds = 3, std::span<const std::uint8_t> crease = {});
 
 /// The vertices within `rings` edges of a seed, reached through vertices that `allowed` accepts;
 /// the seeds themselves are not included.

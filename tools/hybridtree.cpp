@@ -289,6 +289,14 @@ ht::PolygonizeStats total_polygonize(const ht::MeshResult& r) {
     s.crease_edges += p.crease_edges;
     s.corner_vertices += p.corner_vertices;
     s.crease_intersections += p.crease_intersections;
+    s.unfold.pairs_before += p.unfold.pairs_before;
+    s.unfold.pairs_after += p.unfold.pairs_after;
+    s.unfold.collapses += p.unfold.collapses;
+    s.unfold.seconds += p.unfold.seconds;
+    s.snap.merged_vertices += p.snap.merged_vertices;
+    s.snap.removed_triangles += p.snap.removed_triangles;
+    s.snap.skipped_points += p.snap.skipped_points;
+    s.snap.crease_points += p.snap.crease_points;
     s.seconds_classify += p.seconds_classify;
     s.seconds_sample += p.seconds_sample;
     s.seconds_extract += p.seconds_extract;
@@ -393,7 +401,13 @@ int cmd_mesh(const MeshArgs& a) {
     j["bricks"] = {{"total", stats.bricks_total}, {"active", stats.bricks_active}};
     j["sharp_features"] = {{"crease_edges_split", stats.crease_edges},
                            {"corner_vertices", stats.corner_vertices},
+                           {"intersecting_pairs_after_sliding", stats.unfold.pairs_before},
+                           {"unfold_collapses", stats.unfold.collapses},
                            {"intersecting_pairs_left", stats.crease_intersections}};
+    j["snap"] = {{"merged_vertices", stats.snap.merged_vertices},
+                 {"removed_triangles", stats.snap.removed_triangles},
+                 {"crease_points", stats.snap.crease_points},
+                 {"skipped_points", stats.snap.skipped_points}};
     j["quality"] = {{"enabled", options.polygonize.quality.enabled}, {"collapses", stats.quality.collapses},
                     {"flips", stats.quality.flips},         {"splits", stats.quality.splits},
                     {"moved", stats.quality.moved},         {"reverted", stats.quality.reverted},
@@ -404,6 +418,7 @@ int cmd_mesh(const MeshArgs& a) {
                     {"extract", stats.seconds_extract},
                     {"merge", stats.seconds_merge},
                     {"features", stats.seconds_features},
+                    {"unfold", stats.unfold.seconds},
                     {"quality", stats.quality.seconds},
                     {"mesh_total", mesh_s},
                     {"checks", check_s},

@@ -1,0 +1,38 @@
+// The last resort against folds: where triangles still intersect after the crease step and its
+// untangling (meshers/relax.hpp), edges of the intersecting triangles collapse until none do.
+//
+// The folds left are slivers between crease points almost together that no edge joins (a crease
+// through grid points, where two grid edges' crossings fall a hundredth of a cell apart), and
+// pieces of three-sheet corners. Each intersecting triangle gives up its shortest edge that
+// OpenMesh may collapse (is_collapse_ok) without turning a surviving face by more than 60
+// degrees or leaving it degenerate; a crease point survives the collapse where one end is one,
+// so the crease keeps its place. A round works on the intersecting triangles and one ring around
+// them, taken out of the mesh (meshers/submesh.hpp); the next round searches again.
+#pragma once
+
+#include "meshers/triangle_mesh.hpp"
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+namespace ht {
+
+struct UnfoldStats {
+  std::size_t pairs_before = 0;  ///< intersecting pairs found first
+  std::size_t pairs_after = 0;   ///< intersecting pairs left
+  std::size_t collapses = 0;
+  int rounds = 0;
+  double seconds = 0;  ///< wall time, searches included
+};
+
+/// Collapses edges of the intersecting triangles `pairs` (every intersecting pair of the mesh,
+/// as untangle returns them: meshers/relax.hpp), then of those found again around what changed,
+/// at most `rounds` rounds. `crease` (one flag per vertex, may be empty) follows the renumbering.
+/// The mesh stays closed, oriented and manifold; surviving vertices keep their order
+/// (meshers/submesh.hpp put_back). Deterministic. Cost: a search around the changed vertices per
+/// round (meshers/relax.hpp intersections_near) plus the region's work.
+UnfoldStats unfold(TriangleMesh& mesh, std::vector<std::uint8_t>& crease,
+                   std::vector<std::array<std::uint32_t, 2>> pairs, int rounds = 4);
+
+}  // namespace ht
