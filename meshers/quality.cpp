@@ -34,6 +34,7 @@ constexpr double kSpeck = 1e-3;                     // an edge this many cells l
 constexpr double kMergeFraction = 0.1;              // crease points closer than this many cells become one
 constexpr double kDegenerateCos = 0.9999619230641713; // cos 0.5 degrees: no collapse leaves a face this thin
 constexpr double kAimCos = 0.8191520442889918;      // cos 35 degrees: faces thinner than this are worked on
+constexpr double kShortMove = 0.02;                 // of a cell: a tangential move this short is not made
 constexpr double kWorseCos = 0.9659258262890683;    // cos 15 degrees: a relaxation may not leave a face thinner
 
 glm::dvec3 g(const TriMesh::Point& p) { return {p[0], p[1], p[2]}; }
@@ -346,25 +347,37 @@ class Improver {
 
   // One Jacobi step of tangential relaxation with projection, then the moves that hurt undone.
   void relax(QualityStats& st) {
-    const std::size_t nv = m_.n_vertices();
-    std::vector<glm::dvec3> old(nv), moved, dirs, normal(nv);
+    // Only the corners of thin faces move: the rest is as good as relaxation makes it. The work
+    // is on them, their rings (whose normals judge the moves) and the faces around them.
     std::vector<std::uint32_t> who;
-    for (std::size_t v = 0; v < nv; ++v) old[v] = p(VH(int(v)));
-    std::vector<glm::dvec3> target(nv);
-    std::vector<std::uint8_t> moves(nv, 0), wanted(nv, 0);
-    // Only the corners of thin faces move: the rest is as good as relaxation makes it.
+    std::vector<std::uint8_t> wanted(m_.n_vertices(), 0);
     const std::vector<std::uint8_t> thin = thin_faces();
     for (std::size_t f = 0; f < thin.size(); ++f)
       if (thin[f])
-        for (const VH v : corners(FH{int(f)})) wanted[std::size_t(v.idx())] = 1;
-    tbb::parallel_for(std::size_t(0), nv, [&](std::size_t vi) {
-      const VH v{int(vi)};
-      if (m_.status(v).deleted()) return;
+        for (const VH v : corners(FH{int(f)}))
+          if (!wanted[std::size_t(v.idx())] && !locked(v) && !near_locked(v))
+            wanted[std::size_t(v.idx())] = 1, who.push_back(std::uint32_t(v.idx()));
+    std::sort(who.begin(), who.end());
+    std::vector<std::uint32_t> faces, ring;
+    std::vector<std::uint8_t> face_seen(m_.n_faces(), 0), ring_seen(m_.n_vertices(), 0);
+    for (const std::uint32_t v : who)
+      for (const FH f : m_.vf_range(VH(int(v))))
+        if (!face_seen[std::size_t(f.idx())]) {
+          face_seen[std::size_t(f.idx())] = 1;
+          faces.push_back(std::uint32_t(f.idx()));
+          for (const VH c : corners(f))
+            if (!ring_seen[std::size_t(c.idx())]) ring_seen[std::size_t(c.idx())] = 1, ring.push_back(std::uint32_t(c.idx()));
+        }
+    std::sort(faces.begin(), faces.end());
+    // Ring normals (area-weighted) of every vertex the checks read; centroids of the movers.
+    std::vector<glm::dvec3> normal(m_.n_vertices(), glm::dvec3(0.0)), moved(who.size()), dirs(who.size());
+    std::vector<std::uint8_t> moves(who.size(), 0);
+    auto ring_of = [&](VH v, glm::dvec3& centroid) {
       glm::dvec3 c(0.0), n(0.0);
       double area = 0;
       for (const FH f : m_.vf_range(v)) {
         const auto k = corners(f);
-        const glm::dvec3 a = old[std::size_t(k[0].idx())], b = old[std::size_t(k[1].idx())], d = old[std::size_t(k[2].idx())];
+        const glm::dvec3 a = p(k[0]), b = p(k[1]), d = p(k[2]);
         const glm::dvec3 cr = glm::cross(b - a, d - a);
         const double w = glm::length(cr);
         c += w * (a + b + d) / 3.0;
@@ -372,32 +385,47 @@ class Improver {
         area += w;
       }
       const double nl = glm::length(n);
-      if (!(area > 0) || !(nl > 0)) return;
-      normal[vi] = n /= nl;
-      if (!wanted[vi] || locked(v) || near_locked(v)) return;
-      glm::dvec3 d = c / area - old[vi];
-      d -= glm::dot(d, n) * n;
-      target[vi] = old[vi] + d;
-      moves[vi] = 1;
+      if (!(area > 0) || !(nl > 0)) return false;
+      normal[std::size_t(v.idx())] = n / nl;
+      centroid = c / area;
+      return true;
+    };
+    tbb::parallel_for(std::size_t(0), ring.size(), [&](std::size_t i) {
+      glm::dvec3 unused;
+      ring_of(VH(int(ring[i])), unused);
     });
-    for (std::size_t v = 0; v < nv; ++v)
-      if (moves[v]) who.push_back(std::uint32_t(v)), moved.push_back(target[v]), dirs.push_back(normal[v]);
-    std::vector<double> slopes(who.size());
-    for (std::size_t i = 0; i < who.size(); ++i) slopes[i] = m_.property(slope_, VH{int(who[i])});
-    project(moved, dirs, slopes);
-    for (std::size_t i = 0; i < who.size(); ++i) m_.property(slope_, VH{int(who[i])}) = slopes[i];
-    std::vector<glm::dvec3> now = old;
+    tbb::parallel_for(std::size_t(0), who.size(), [&](std::size_t i) {
+      const VH v(int(who[i]));
+      glm::dvec3 c;
+      if (!ring_of(v, c)) return;
+      const glm::dvec3 n = normal[who[i]], at = p(v);
+      glm::dvec3 d = c - at;
+      d -= glm::dot(d, n) * n;
+      // A move this short changes no angle that matters and is not worth a field evaluation.
+      if (glm::dot(d, d) < kShortMove * kShortMove * h_ * h_) return;
+      moved[i] = at + d;
+      dirs[i] = n;
+      moves[i] = 1;
+    });
+    std::vector<std::uint32_t> movers;
+    std::vector<glm::dvec3> targets, normals_of;
     for (std::size_t i = 0; i < who.size(); ++i)
-      if (!std::isnan(moved[i].x)) now[who[i]] = moved[i];
+      if (moves[i]) movers.push_back(who[i]), targets.push_back(moved[i]), normals_of.push_back(dirs[i]);
+    std::vector<double> slopes(movers.size());
+    for (std::size_t i = 0; i < movers.size(); ++i) slopes[i] = m_.property(slope_, VH{int(movers[i])});
+    project(targets, normals_of, slopes);
+    for (std::size_t i = 0; i < movers.size(); ++i) m_.property(slope_, VH{int(movers[i])}) = slopes[i];
+    // Positions before and after, indexed like the mesh's vertices but filled only where read.
+    std::vector<glm::dvec3> old(m_.n_vertices()), now(m_.n_vertices());
+    for (const std::uint32_t v : ring) old[v] = now[v] = p(VH(int(v)));
+    for (std::size_t i = 0; i < movers.size(); ++i)
+      if (!std::isnan(targets[i].x)) now[movers[i]] = targets[i];
     // Undo the moves of every face that turned or got much thinner, until none does.
-    const std::size_t nf = m_.n_faces();
-    std::vector<std::uint8_t> bad(nf, 0);
+    std::vector<std::uint8_t> bad(faces.size(), 0);
     for (int round = 0; round < 16; ++round) {
-      tbb::parallel_for(std::size_t(0), nf, [&](std::size_t fi) {
+      tbb::parallel_for(std::size_t(0), faces.size(), [&](std::size_t fi) {
         bad[fi] = 0;
-        const FH f{int(fi)};
-        if (m_.status(f).deleted()) return;
-        const auto k = corners(f);
+        const auto k = corners(FH(int(faces[fi])));
         const std::size_t i0 = std::size_t(k[0].idx()), i1 = std::size_t(k[1].idx()), i2 = std::size_t(k[2].idx());
         if (now[i0] == old[i0] && now[i1] == old[i1] && now[i2] == old[i2]) return;
         // Held to its corners' ring normals: a sliver's own normal means nothing.
@@ -406,9 +434,9 @@ class Improver {
         bad[fi] = glm::dot(ref, after) < kTurnCos * glm::length(ref) || (t1 > t0 && t1 > kWorseCos) || t1 > kDegenerateCos;
       });
       std::size_t undone = 0;
-      for (std::size_t fi = 0; fi < nf; ++fi) {
+      for (std::size_t fi = 0; fi < faces.size(); ++fi) {
         if (!bad[fi]) continue;
-        for (const VH v : corners(FH(int(fi)))) {
+        for (const VH v : corners(FH(int(faces[fi])))) {
           const std::size_t i = std::size_t(v.idx());
           if (now[i] != old[i]) now[i] = old[i], ++undone;
         }
@@ -416,9 +444,10 @@ class Improver {
       st.reverted += undone;
       if (undone == 0) break;
     }
-    for (const std::uint32_t v : who)
+    for (const std::uint32_t v : movers)
       if (now[v] != old[v]) m_.set_point(VH(int(v)), om(now[v])), ++st.moved;
   }
+
 
   TriMesh m_;
   std::span<const std::uint8_t> crease_;  // by input vertex: on a crease line
