@@ -132,6 +132,8 @@ MeshChecks check_mesh(const TriangleMesh& mesh, bool self_intersections) {
   }
   const double scale = std::max(glm::length(hi - lo), 1e-300);
   c.min_angle = T.empty() ? 0.0 : 180.0;
+  std::vector<float> smallest;  // each triangle's smallest angle, for the percentile
+  smallest.reserve(T.size());
   for (const auto& t : T) {
     const glm::dvec3 a = P[t[0]], b = P[t[1]], d = P[t[2]];
     const glm::dvec3 n = glm::cross(b - a, d - a);
@@ -148,6 +150,12 @@ MeshChecks check_mesh(const TriangleMesh& mesh, bool self_intersections) {
     }
     c.min_angle = std::min(c.min_angle, amin);
     ++c.min_angle_histogram[std::min<std::size_t>(5, static_cast<std::size_t>(amin / 10.0))];
+    smallest.push_back(float(amin));
+  }
+  if (!smallest.empty()) {
+    const auto at = smallest.begin() + std::ptrdiff_t(smallest.size() / 100);
+    std::nth_element(smallest.begin(), at, smallest.end());
+    c.min_angle_p1 = *at;
   }
   if (!T.empty() && self_intersections) c.self_intersecting_pairs = find_self_intersections(mesh, 0).pairs;
   return c;

@@ -27,6 +27,7 @@ struct MeshChecks {
   long genus = 0;                       ///< sum over components of (2 - chi) / 2 (closed meshes)
   double area = 0, volume = 0;          ///< volume by the divergence theorem (closed meshes)
   double min_angle = 0;                 ///< degrees, over all triangles
+  double min_angle_p1 = 0;              ///< degrees: the first percentile of the triangles' smallest angles
   std::array<std::size_t, 6> min_angle_histogram{};  ///< triangles by min angle: [0,10) ... [50,60]
   // Surface error, filled by measure_surface_error(): distance to the isosurface estimated as
   // |f - T| / |grad f|, at vertices and at face centres.

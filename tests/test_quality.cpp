@@ -81,6 +81,9 @@ TEST(Quality, SnakeTrianglesAreWellShaped) {
   // Marching tetrahedra alone: a first percentile near 1 degree (what makes the bound a test).
   EXPECT_LT(percentile(a0, 0.01), 5.0);
   EXPECT_GE(percentile(a1, 0.01), 25.0);
+  // The checks' own percentile (meshers/mesh_checks.hpp), as --stats-json reports it.
+  EXPECT_NEAR(on.checks.min_angle_p1, percentile(a1, 0.01), 1e-4);
+  EXPECT_NEAR(off.checks.min_angle_p1, percentile(a0, 0.01), 1e-4);
   EXPECT_EQ(on.checks.self_intersecting_pairs, 0u);
   EXPECT_EQ(on.checks.inverted_faces, 0u);
   EXPECT_LE(on.checks.vertex_error_max, off.checks.vertex_error_max * 1.05 + 1e-9);

@@ -389,6 +389,7 @@ int cmd_mesh(const MeshArgs& a) {
                    {"area", checks.area},
                    {"volume", checks.volume},
                    {"min_angle_degrees", checks.min_angle},
+                   {"min_angle_p1_degrees", checks.min_angle_p1},
                    {"min_angle_histogram_10deg", checks.min_angle_histogram},
                    {"surface_error_vertex_max", checks.vertex_error_max},
                    {"surface_error_vertex_mean", checks.vertex_error_mean},
