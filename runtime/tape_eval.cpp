@@ -7,6 +7,11 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <atomic>
+#include <cstdlib>
+#include <stdexcept>
+#include <string>
+#include <string_view>
 #include <cmath>
 #include <limits>
 #include <type_traits>
@@ -51,56 +56,96 @@ HT_LANE void primitive_loop(const Block<T>& b, const Instruction& ins, const flo
   const T* y = b.axis(ins.a, 1);
   const T* z = b.axis(ins.a, 2);
   T* out = b.reg(ins.out);
-  for (int i = 0; i < n; ++i) out[i] = falloff2(dist(V3<T>{x[i], y[i], z[i]}), k);
+  for (int i = 0; i < n; ++i) out[i] = falloff2(dist(V3<T>{x[i], y[i], z[i]}), k);  // vectorized in every build
 }
 
 // A curve: its polyline has dozens of segments, and most points of a block lie outside its
-// support. Lanes go in chunks of kChunk: a chunk with no lane inside the support box is 0 at
-// once; the others run segment by segment, keeping each lane's nearest.
+// support. Values: the lanes inside the support box are gathered into a dense list first, so
+// the segments run over full vectors of points that need them (points in no order, as a user's
+// batch, leave one or two lanes of sixteen inside); the others are 0 at once. Gradients: lanes in
+// chunks of kChunk, a chunk with no lane inside the box 0 at once.
 constexpr int kChunk = 16;
 static_assert(kBlock % kChunk == 0, "blocks hold whole chunks");
 
-template <class T>
-HT_LANE void curve_loop(const Block<T>& b, const Instruction& ins, const float* k, int n) {
-  const T* x = b.axis(ins.a, 0);
-  const T* y = b.axis(ins.a, 1);
-  const T* z = b.axis(ins.a, 2);
-  T* out = b.reg(ins.out);
+HT_LANE bool in_box(float x, float y, float z, const float* box) {
+  return (x >= box[0]) & (x <= box[3]) & (y >= box[1]) & (y <= box[4]) & (z >= box[2]) & (z <= box[5]);
+}
+
+HT_LANE void curve_loop(const Block<float>& b, const Instruction& ins, const float* k, int n) {
+  const float* x = b.axis(ins.a, 0);
+  const float* y = b.axis(ins.a, 1);
+  const float* z = b.axis(ins.a, 2);
+  float* out = b.reg(ins.out);
   const float* box = k + 4;  // support lo(3) hi(3)
+  const float* s = k + 10;
+  const int segments = static_cast<int>(s[0]);
+  // The box test over all lanes (vectorized), then the inside lanes listed, chunk by chunk, a
+  // chunk with none inside skipped whole.
+  alignas(64) std::uint8_t inside[kBlock];
+  for (int i = 0; i < n; ++i) {
+    out[i] = 0.0f;
+    inside[i] = in_box(x[i], y[i], z[i], box);
+  }
+  std::uint16_t lane[kBlock + kChunk];
+  int m = 0;
+  for (int c0 = 0; c0 < n; c0 += kChunk) {
+    const int c1 = std::min(c0 + kChunk, n);
+    std::uint8_t any = 0;
+    for (int i = c0; i < c1; ++i) any |= inside[i];
+    if (!any) continue;
+    for (int i = c0; i < c1; ++i) {
+      lane[m] = static_cast<std::uint16_t>(i);
+      m += inside[i];
+    }
+  }
+  if (m == 0) return;
+  // Whole chunks of gathered lanes, the last padded with its first lane's point: the vector
+  // loops below then run no scalar remainder.
+  const int padded = (m + kChunk - 1) / kChunk * kChunk;
+  for (int j = m; j < padded; ++j) lane[j] = lane[0];
+  alignas(64) float gx[kBlock + kChunk], gy[kBlock + kChunk], gz[kBlock + kChunk], d[kBlock + kChunk];
+  for (int j = 0; j < padded; ++j) {
+    gx[j] = x[lane[j]];
+    gy[j] = y[lane[j]];
+    gz[j] = z[lane[j]];
+    d[j] = std::numeric_limits<float>::max();
+  }
+  for (int g = 0; g < segments; ++g) {
+    const float* seg = s + 1 + 7 * g;
+    for (int j = 0; j < padded; ++j) d[j] = min_(d[j], segment2(V3<float>{gx[j], gy[j], gz[j]}, seg));  // vectorized in every build
+  }
+  for (int j = 0; j < m; ++j) out[lane[j]] = falloff2(d[j], k);
+}
+
+HT_LANE void curve_loop(const Block<Dual>& b, const Instruction& ins, const float* k, int n) {
+  const Dual* x = b.axis(ins.a, 0);
+  const Dual* y = b.axis(ins.a, 1);
+  const Dual* z = b.axis(ins.a, 2);
+  Dual* out = b.reg(ins.out);
+  const float* box = k + 4;
   const float* s = k + 10;
   const int segments = static_cast<int>(s[0]);
   for (int c0 = 0; c0 < n; c0 += kChunk) {
     int near = 0;
-    for (int i = c0; i < c0 + kChunk; ++i)
-      near |= (val(x[i]) >= box[0]) & (val(x[i]) <= box[3]) & (val(y[i]) >= box[1]) & (val(y[i]) <= box[4]) &
-              (val(z[i]) >= box[2]) & (val(z[i]) <= box[5]);
-    T* o = out + c0;
+    for (int i = c0; i < c0 + kChunk; ++i) near |= in_box(x[i].v, y[i].v, z[i].v, box);
+    Dual* o = out + c0;
     if (!near) {
-      for (int i = 0; i < kChunk; ++i) o[i] = T(0.0f);
+      for (int i = 0; i < kChunk; ++i) o[i] = Dual(0.0f);
       continue;
     }
-    if constexpr (std::is_same_v<T, float>) {
-      for (int i = 0; i < kChunk; ++i) o[i] = std::numeric_limits<float>::max();
-      for (int g = 0; g < segments; ++g) {
-        const float* seg = s + 1 + 7 * g;
-        for (int i = 0; i < kChunk; ++i) o[i] = min_(o[i], segment2(V3<T>{x[c0 + i], y[c0 + i], z[c0 + i]}, seg));
-      }
-    } else {
-      // Gradients: the nearest segment found on values, then differentiated alone (the min's
-      // derivative is its argument's), instead of carrying derivatives through every segment.
-      for (int i = 0; i < kChunk; ++i) {
-        const V3<float> q{val(x[c0 + i]), val(y[c0 + i]), val(z[c0 + i])};
-        float best = std::numeric_limits<float>::max();
-        int at = 0;
-        for (int g = 0; g < segments; ++g)
-          if (const float d = segment2(q, s + 1 + 7 * g); d < best) {
-            best = d;
-            at = g;
-          }
-        o[i] = segment2(V3<T>{x[c0 + i], y[c0 + i], z[c0 + i]}, s + 1 + 7 * at);
-      }
+    // The nearest segment found on values, then differentiated alone (the min's derivative is
+    // its argument's), instead of carrying derivatives through every segment.
+    for (int i = 0; i < kChunk; ++i) {
+      const V3<float> q{x[c0 + i].v, y[c0 + i].v, z[c0 + i].v};
+      float best = std::numeric_limits<float>::max();
+      int at = 0;
+      for (int g = 0; g < segments; ++g)
+        if (const float dist = segment2(q, s + 1 + 7 * g); dist < best) {
+          best = dist;
+          at = g;
+        }
+      o[i] = falloff2(segment2(V3<Dual>{x[c0 + i], y[c0 + i], z[c0 + i]}, s + 1 + 7 * at), k);
     }
-    for (int i = 0; i < kChunk; ++i) o[i] = falloff2(o[i], k);
   }
 }
 
@@ -292,15 +337,60 @@ HT_LANE void run(const Tape& tape, const Block<T>& b, int n) {
   }
 }
 
-// The float path is built three times and picked at load time (GCC function multiversioning):
-// the widest vectors the CPU has, with a binary that runs on any x86-64.
+// The float path is built once per instruction set and picked at run time. The lane code is
+// written so that GCC vectorizes it on each (select, not branch, in runtime/tape_ops.hpp, and
+// -fno-trapping-math so that both arms may be computed); tests/test_vectorization.cpp checks
+// that the loops so marked are vectorized by each build.
 #if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
-#define HT_MULTIVERSION __attribute__((target_clones("avx512f", "avx2", "default")))
-#else
-#define HT_MULTIVERSION
+#define HT_X86_BUILDS 1
+[[gnu::target("avx512f,avx512vl,avx512dq,avx512bw,avx2,fma,bmi2")]]
+void run_values_avx512(const Tape& tape, const Block<float>& b, int n) { run(tape, b, n); }
+[[gnu::target("avx2,fma,bmi2")]] void run_values_avx2(const Tape& tape, const Block<float>& b, int n) { run(tape, b, n); }
+[[gnu::target("sse4.2,popcnt")]] void run_values_sse4(const Tape& tape, const Block<float>& b, int n) { run(tape, b, n); }
 #endif
+void run_values_baseline(const Tape& tape, const Block<float>& b, int n) { run(tape, b, n); }
 
-HT_MULTIVERSION void run_values(const Tape& tape, const Block<float>& b, int n) { run(tape, b, n); }
+using RunValues = void (*)(const Tape&, const Block<float>&, int);
+
+RunValues builds(TapeIsa isa) {
+#ifdef HT_X86_BUILDS
+  switch (isa) {
+    case TapeIsa::Avx512: return run_values_avx512;
+    case TapeIsa::Avx2: return run_values_avx2;
+    case TapeIsa::Sse4: return run_values_sse4;
+    case TapeIsa::Baseline: break;
+  }
+#else
+  (void)isa;
+#endif
+  return run_values_baseline;
+}
+
+TapeIsa widest_supported() {
+  for (const TapeIsa isa : {TapeIsa::Avx512, TapeIsa::Avx2, TapeIsa::Sse4})
+    if (tape_isa_supported(isa)) return isa;
+  return TapeIsa::Baseline;
+}
+
+TapeIsa from_environment() {
+  const char* want = std::getenv("HYBRIDTREE_TAPE_ISA");
+  if (!want || !*want) return widest_supported();
+  for (const TapeIsa isa : {TapeIsa::Avx512, TapeIsa::Avx2, TapeIsa::Sse4, TapeIsa::Baseline})
+    if (std::string_view(want) == tape_isa_name(isa)) {
+      if (!tape_isa_supported(isa))
+        throw std::invalid_argument(std::string("HYBRIDTREE_TAPE_ISA=") + want + ": this CPU cannot run it");
+      return isa;
+    }
+  throw std::invalid_argument(std::string("HYBRIDTREE_TAPE_ISA=") + want + ": not one of avx512, avx2, sse4, baseline");
+}
+
+std::atomic<int> g_isa{-1};  // the TapeIsa in use, -1 until the first call
+
+void run_values(const Tape& tape, const Block<float>& b, int n) {
+  int isa = g_isa.load(std::memory_order_relaxed);
+  if (isa < 0) isa = static_cast<int>(tape_isa());
+  builds(static_cast<TapeIsa>(isa))(tape, b, n);
+}
 void run_gradients(const Tape& tape, const Block<Dual>& b, int n) { run(tape, b, n); }
 
 #undef HT_LANE
@@ -320,6 +410,49 @@ void for_blocks(std::size_t n, Body&& body) {
 }
 
 }  // namespace
+
+const char* tape_isa_name(TapeIsa isa) {
+  switch (isa) {
+    case TapeIsa::Avx512: return "avx512";
+    case TapeIsa::Avx2: return "avx2";
+    case TapeIsa::Sse4: return "sse4";
+    case TapeIsa::Baseline: return "baseline";
+  }
+  return "baseline";
+}
+
+bool tape_isa_supported(TapeIsa isa) {
+#ifdef HT_X86_BUILDS
+  switch (isa) {
+    case TapeIsa::Avx512:
+      return __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl") &&
+             __builtin_cpu_supports("avx512dq") && __builtin_cpu_supports("avx512bw") && __builtin_cpu_supports("fma") &&
+             __builtin_cpu_supports("bmi2");
+    case TapeIsa::Avx2: return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma") && __builtin_cpu_supports("bmi2");
+    case TapeIsa::Sse4: return __builtin_cpu_supports("sse4.2") && __builtin_cpu_supports("popcnt");
+    case TapeIsa::Baseline: return true;
+  }
+  return false;
+#else
+  return isa == TapeIsa::Baseline;
+#endif
+}
+
+TapeIsa tape_isa() {
+  int isa = g_isa.load(std::memory_order_acquire);
+  if (isa < 0) {
+    int expected = -1;
+    g_isa.compare_exchange_strong(expected, static_cast<int>(from_environment()), std::memory_order_acq_rel);
+    isa = g_isa.load(std::memory_order_acquire);
+  }
+  return static_cast<TapeIsa>(isa);
+}
+
+void force_tape_isa(TapeIsa isa) {
+  if (!tape_isa_supported(isa))
+    throw std::invalid_argument(std::string("force_tape_isa: this CPU cannot run ") + tape_isa_name(isa));
+  g_isa.store(static_cast<int>(isa), std::memory_order_release);
+}
 
 TapeEvaluator::TapeEvaluator(std::shared_ptr<const Tape> tape)
     : tape_(std::move(tape)), impl_(std::make_unique<Impl>()) {}

@@ -68,6 +68,19 @@ HT_LANE T abs_(const T& x) {
   return val(x) < 0 ? T(0.0f) - x : x;
 }
 
+// The float lanes select instead of branching: every arm is computed and a select (a blend on
+// x86) keeps one, so GCC vectorizes the loops on every target, AVX2 and SSE included, whose
+// lack of masked arithmetic made it keep a computing arm behind a branch. NaN keeps the
+// templates' choice (a comparison with NaN is false).
+HT_LANE float max_(float a, float b) { return a >= b ? a : b; }
+HT_LANE float min_(float a, float b) { return a <= b ? a : b; }
+HT_LANE float clamp_(float x, float lo, float hi) {
+  const float above = x < lo ? lo : x;
+  return above > hi ? hi : above;
+}
+HT_LANE float abs_(float x) { return std::fabs(x); }
+HT_LANE float select_(bool c, float a, float b) { return c ? a : b; }
+
 template <class T>
 struct V3 {
   T x, y, z;
@@ -91,6 +104,10 @@ template <class T>
 HT_LANE T falloff2(const T& d2, const float* k) {
   const T u = T(1.0f) - d2 * k[1];
   return val(u) > 0 ? u * u * u * k[2] : T(0.0f);
+}
+HT_LANE float falloff2(float d2, const float* k) {
+  const float u = 1.0f - d2 * k[1], m = u > 0.0f ? u : 0.0f;
+  return m * m * m * k[2];
 }
 
 // Squared distances to the skeletons; s points past the 4-float header.
@@ -135,6 +152,20 @@ HT_LANE T triangle2(const V3<T>& q, const float* s) {
   return h * h * s[33];
 }
 
+HT_LANE float triangle2(const V3<float>& q, const float* s) {
+  const V3<float> pa = sub(q, s), pb = sub(q, s + 3), pc = sub(q, s + 6);
+  auto side = [](float x) { return select_(x > 0, 1.0f, select_(x < 0, -1.0f, 0.0f)); };
+  const float inside_prism = side(dot(pa, s + 18)) + side(dot(pb, s + 21)) + side(dot(pc, s + 24));
+  auto edge = [&](const V3<float>& p, const float* e, float inv) {
+    const float t = clamp_(dot(p, e) * inv, 0.0f, 1.0f);
+    const V3<float> d{t * e[0] - p.x, t * e[1] - p.y, t * e[2] - p.z};
+    return norm2(d);
+  };
+  const float to_edges = min_(min_(edge(pa, s + 9, s[30]), edge(pb, s + 12, s[31])), edge(pc, s + 15, s[32]));
+  const float h = dot(pa, s + 27);
+  return select_(inside_prism < 2.0f, to_edges, h * h * s[33]);
+}
+
 template <class T>
 HT_LANE T box2(const V3<T>& q, const float* s) {  // centre(3) half(3)
   const T ox = max_(abs_(q.x - s[0]) - s[3], T(0.0f));
@@ -173,6 +204,19 @@ HT_LANE T cone_sphere2(const V3<T>& q, const float* s) {
   else
     sd = y * cs + x * sn - ra;
   const T d = max_(sd, T(0.0f));
+  return d * d;
+}
+
+HT_LANE float cone_sphere2(const V3<float>& q, const float* s) {
+  const V3<float> pa = sub(q, s);
+  const float x = dot(pa, s + 3);
+  const float y = sqrt_(max_(norm2(pa) - x * x, 0.0f));
+  const float len = s[6], ra = s[7], rb = s[8], sn = s[9], cs = s[10];
+  const float along = x * cs - y * sn;
+  const float to_a = sqrt_(x * x + y * y) - ra, to_b = sqrt_((x - len) * (x - len) + y * y) - rb;
+  float sd = select_(along < 0, to_a, select_(along > len * cs, to_b, y * cs + x * sn - ra));
+  if (s[11] != 0.0f) sd = to_a;  // one sphere holds the other: centre a, radius s[7] (loop-invariant)
+  const float d = max_(sd, 0.0f);
   return d * d;
 }
 

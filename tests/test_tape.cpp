@@ -13,6 +13,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstdio>
+#include <stdexcept>
 
 using namespace ht;
 using glm::dvec3;
@@ -84,6 +86,47 @@ TEST(Tape, EqualsTheTreeOnRandomTrees) {
   }
   // Points that needed the neighbourhood rule must stay rare.
   EXPECT_LT(static_cast<double>(ill_conditioned), 1e-3 * static_cast<double>(points)) << ill_conditioned;
+}
+
+TEST(Tape, EveryInstructionSetGivesTheSameValues) {
+  // Each build of the value path (runtime/tape_eval.hpp TapeIsa) this CPU can run: equal to the
+  // tree as above, and bit for bit to the baseline build, since no build contracts or
+  // reassociates.
+  std::vector<TapeIsa> builds;
+  for (const TapeIsa isa : {TapeIsa::Baseline, TapeIsa::Sse4, TapeIsa::Avx2, TapeIsa::Avx512})
+    if (tape_isa_supported(isa)) builds.push_back(isa);
+  ASSERT_EQ(builds.front(), TapeIsa::Baseline);
+  const TapeIsa widest = tape_isa();
+  test::Rng rng(53);
+  test::RandomTreeOptions opt;
+  opt.meshes = test_meshes();
+  constexpr int kTrees = 400, kPoints = 300;  // 300: a full block and a ragged one
+  for (int trial = 0; trial < kTrees; ++trial) {
+    Builder b(kT);
+    const NodeId root = test::random_tree(b, rng, opt);
+    const Tree t = b.build(root);
+    const TapeEvaluator eval(std::make_shared<const Tape>(compile_tape(t.graph_ptr(), root, kT)));
+    std::vector<dvec3> pts(kPoints);
+    for (auto& p : pts) p = test::random_point(rng, 2.5);
+    std::vector<double> base(pts.size()), values(pts.size());
+    for (const TapeIsa isa : builds) {
+      force_tape_isa(isa);
+      eval.field(pts, isa == TapeIsa::Baseline ? base : values);
+      if (isa == TapeIsa::Baseline) continue;
+      for (std::size_t i = 0; i < pts.size(); ++i) {
+        bool conditioned = true;
+        const double tree = reference_field(t.graph(), root, kT, pts[i]);
+        ASSERT_TRUE(close_to_tree(t.graph(), root, pts[i], values[i], tree, conditioned))
+            << tape_isa_name(isa) << " trial " << trial << " point " << i;
+        ASSERT_EQ(values[i], base[i]) << tape_isa_name(isa) << " trial " << trial << " point " << i;
+      }
+    }
+  }
+  force_tape_isa(widest);
+  std::printf("builds compared:");
+  for (const TapeIsa isa : builds) std::printf(" %s", tape_isa_name(isa));
+  std::printf("\n");
+  EXPECT_THROW(force_tape_isa(static_cast<TapeIsa>(200)), std::invalid_argument);
 }
 
 TEST(Tape, GradientsEqualTheTreeOnRandomTrees) {
