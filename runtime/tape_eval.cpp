@@ -301,6 +301,19 @@ HT_LANE void run(const Tape& tape, const Block<T>& b, int n) {
 #endif
 
 HT_MULTIVERSION void run_values(const Tape& tape, const Block<float>& b, int n) { run(tape, b, n); }
+
+// GCC's resolver takes the first clone of the list above that the CPU supports; this asks the
+// same questions in the same order.
+const char* values_isa() {
+#if defined(__x86_64__) && defined(__GNUC__) && !defined(__clang__)
+  __builtin_cpu_init();
+  if (__builtin_cpu_supports("avx512f")) return "avx512f";
+  if (__builtin_cpu_supports("avx2")) return "avx2";
+  return "x86-64";
+#else
+  return "portable";
+#endif
+}
 void run_gradients(const Tape& tape, const Block<Dual>& b, int n) { run(tape, b, n); }
 
 #undef HT_LANE
@@ -320,6 +333,8 @@ void for_blocks(std::size_t n, Body&& body) {
 }
 
 }  // namespace
+
+const char* TapeEvaluator::isa() { return values_isa(); }
 
 TapeEvaluator::TapeEvaluator(std::shared_ptr<const Tape> tape)
     : tape_(std::move(tape)), impl_(std::make_unique<Impl>()) {}

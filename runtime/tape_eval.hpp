@@ -40,6 +40,9 @@ class TapeEvaluator {
   void gradient(std::span<const glm::dvec3> points, std::span<double> values, std::span<glm::dvec3> gradients) const;
 
   const Tape& tape() const { return *tape_; }
+  /// The build the value path runs on this CPU: "avx512f", "avx2", "x86-64" (the baseline
+  /// build), or "portable" when the compiler builds only one (not GCC on x86-64).
+  static const char* isa();
   /// Evaluates one block of at most kBlock points on the calling thread (no TBB): the unit
   /// that meshers and benchmarks drive directly.
   void field_block(const float* x, const float* y, const float* z, int n, float* values) const;
