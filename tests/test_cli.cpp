@@ -7,9 +7,12 @@
 
 #include <map>
 
+#include <cmath>
 #include <cstdlib>
+#include <cstring>
 #include <fstream>
 #include <nlohmann/json.hpp>
+#include <random>
 #include <sstream>
 
 using namespace ht;
@@ -261,5 +264,202 @@ TEST(Cli, SharpFeaturesCanBeTurnedOff) {
   EXPECT_LT(face_error[1], 0.5 * face_error[0]);
   const auto bad = test::run_cli("mesh " + s + " -o " + (dir / "m.ply").string() + " --sharp-features maybe");
   EXPECT_EQ(bad.code, 2);
+  std::filesystem::remove_all(dir);
+}
+
+// --- eval with .npy points and output -------------------------------------------------------
+// The files are built and read here byte by byte, apart from tools/npy.cpp, so that the tests
+// check the format itself rather than the CLI against its own reader.
+namespace {
+
+std::string slurp(const std::filesystem::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  std::stringstream s;
+  s << in.rdbuf();
+  return s.str();
+}
+
+// An .npy file: magic, version, header length (2 bytes for 1.x, 4 for 2.x), dict, payload.
+std::string npy_bytes(const std::string& dict, const std::string& payload, int major = 1) {
+  std::string header = dict;
+  const std::size_t preamble = major == 1 ? 10 : 12;
+  while ((preamble + header.size() + 1) % 64) header += ' ';
+  header += '\n';
+  std::string out = std::string("\x93NUMPY", 6) + char(major) + '\0';
+  for (int i = 0; i < (major == 1 ? 2 : 4); ++i) out += char((header.size() >> (8 * i)) & 0xff);
+  return out + header + payload;
+}
+
+std::string npy_dict(const std::string& descr, const std::string& shape, bool fortran = false) {
+  return "{'descr': '" + descr + "', 'fortran_order': " + (fortran ? "True" : "False") + ", 'shape': " + shape + ", }";
+}
+
+template <class Float>
+std::string raw(const std::vector<glm::dvec3>& points) {
+  std::string out;
+  for (const glm::dvec3& p : points)
+    for (int j = 0; j < 3; ++j) {
+      const Float v = static_cast<Float>(p[j]);
+      out.append(reinterpret_cast<const char*>(&v), sizeof v);
+    }
+  return out;
+}
+
+// An output file: its header must be exactly what numpy.save writes; the data as doubles.
+std::vector<double> read_npy_output(const std::filesystem::path& file, const std::string& descr, const std::string& shape) {
+  const std::string bytes = slurp(file);
+  const std::string expected = npy_bytes(npy_dict(descr, shape), "");
+  EXPECT_EQ(bytes.substr(0, expected.size()), expected) << file;
+  std::vector<double> out;
+  const std::size_t item = descr == "<f4" ? 4 : 8;
+  for (std::size_t at = expected.size(); at + item <= bytes.size(); at += item) {
+    if (item == 4) {
+      float f;
+      std::memcpy(&f, bytes.data() + at, 4);
+      out.push_back(f);
+    } else {
+      double d;
+      std::memcpy(&d, bytes.data() + at, 8);
+      out.push_back(d);
+    }
+  }
+  EXPECT_EQ((bytes.size() - expected.size()) % item, 0u);
+  return out;
+}
+
+std::vector<double> numbers(const std::string& text) {
+  std::istringstream in(text);
+  std::vector<double> out;
+  for (double v; in >> v;) out.push_back(v);
+  return out;
+}
+
+}  // namespace
+
+TEST(Cli, EvalNpyMatchesTextForBothDtypesAndAnyThreadCount) {
+  const auto dir = test::temp_dir("cli-npy");
+  const std::string s = write_scene(dir, "snake.json", scenes::snake_json(30));
+  auto rng = test::seeded();
+  std::uniform_real_distribution<double> ux(-1, 13), uy(-2, 2), uz(-1.5, 2);
+  std::vector<glm::dvec3> points(1500);  // 6 blocks of the tape: enough for two threads to share
+  for (auto& p : points) p = {ux(rng), uy(rng), uz(rng)};
+  const std::string n = std::to_string(points.size());
+  for (const std::string descr : {"<f4", "<f8"}) {
+    const bool f4 = descr == "<f4";
+    test::write_file(dir / "p.npy", npy_bytes(npy_dict(descr, "(" + n + ", 3)"), f4 ? raw<float>(points) : raw<double>(points)));
+    // The same coordinates as text: 17 digits give the double (or the float, as a double) back
+    // exactly, so that the tree engine, in double, sees the very same points.
+    std::string text;
+    char buf[96];
+    for (const glm::dvec3& p : points) {
+      const glm::dvec3 q = f4 ? glm::dvec3(glm::vec3(p)) : p;
+      std::snprintf(buf, sizeof buf, "%.17g %.17g %.17g\n", q.x, q.y, q.z);
+      text += buf;
+    }
+    test::write_file(dir / "p.txt", text);
+    for (const std::string engine : {"tape", "tree"})
+      for (const bool gradient : {false, true}) {
+        const std::string flags = " --engine " + engine + (gradient ? " --gradient" : "");
+        const std::string what = descr + flags;
+        const auto t = test::run_cli("eval " + s + " --points " + (dir / "p.txt").string() + flags);
+        ASSERT_EQ(t.code, 0) << t.err;
+        for (const char* threads : {"1", "2"}) {
+          const auto r = test::run_cli("eval " + s + " --points " + (dir / "p.npy").string() + " -o " +
+                                       (dir / (std::string("o") + threads + ".npy")).string() + " --threads " + threads + flags);
+          ASSERT_EQ(r.code, 0) << r.err;
+          EXPECT_EQ(r.out, "") << "an output file, nothing on stdout";
+        }
+        EXPECT_EQ(slurp(dir / "o1.npy"), slurp(dir / "o2.npy")) << what << ": the same bytes at 1 and 2 threads";
+        const std::vector<double> expected = numbers(t.out);
+        const std::vector<double> got = read_npy_output(dir / "o2.npy", descr, gradient ? "(" + n + ", 4)" : "(" + n + ",)");
+        ASSERT_EQ(expected.size(), points.size() * (gradient ? 4 : 1)) << what;
+        ASSERT_EQ(got.size(), expected.size()) << what;
+        double nonzero = 0;
+        for (std::size_t i = 0; i < got.size(); ++i) {
+          nonzero += got[i] != 0;
+          if (engine == "tape") {  // floats: 9 digits of text give each one back exactly
+            ASSERT_EQ(float(got[i]), float(expected[i])) << what << " entry " << i;
+            ASSERT_EQ(got[i], double(float(got[i]))) << what << " entry " << i;
+          } else {  // doubles, rounded to 9 digits in the text and to float in '<f4'
+            ASSERT_NEAR(got[i], expected[i], (f4 ? 1e-7 : 1e-8) * std::max(1.0, std::abs(expected[i])))
+                << what << " entry " << i;
+          }
+        }
+        EXPECT_GT(nonzero, 0.1 * double(got.size())) << what << ": the points must reach the snake";
+      }
+  }
+  // Text points in, .npy out: float32, the tape's precision. Format 2.0 and empty arrays read.
+  const auto t = test::run_cli("eval " + s + " -o " + (dir / "t.npy").string(), "1 0 0.5\n5 0.5 0\n");
+  ASSERT_EQ(t.code, 0) << t.err;
+  const auto from_text = read_npy_output(dir / "t.npy", "<f4", "(2,)");
+  const auto printed = numbers(test::run_cli("eval " + s, "1 0 0.5\n5 0.5 0\n").out);
+  auto floats = [](const std::vector<double>& v) { return std::vector<float>(v.begin(), v.end()); };
+  ASSERT_EQ(printed.size(), 2u);
+  EXPECT_GT(printed[0], 1.0);
+  EXPECT_EQ(floats(from_text), floats(printed));
+  test::write_file(dir / "v2.npy", npy_bytes(npy_dict("<f8", "(2, 3)"), raw<double>({{1, 0, 0.5}, {5, 0.5, 0}}), 2));
+  const auto v2 = test::run_cli("eval " + s + " --points " + (dir / "v2.npy").string() + " -o " + (dir / "v2out.npy").string());
+  ASSERT_EQ(v2.code, 0) << v2.err;
+  EXPECT_EQ(floats(read_npy_output(dir / "v2out.npy", "<f8", "(2,)")), floats(printed));
+  test::write_file(dir / "empty.npy", npy_bytes(npy_dict("<f4", "(0, 3)"), ""));
+  const auto empty = test::run_cli("eval " + s + " --gradient --points " + (dir / "empty.npy").string() + " -o " +
+                                   (dir / "eout.npy").string());
+  ASSERT_EQ(empty.code, 0) << empty.err;
+  EXPECT_TRUE(read_npy_output(dir / "eout.npy", "<f4", "(0, 4)").empty());
+  std::filesystem::remove_all(dir);
+}
+
+TEST(Cli, EvalRefusesMalformedNpyNamingTheFileAndWritesNothing) {
+  const auto dir = test::temp_dir("cli-npy-bad");
+  const std::string s = write_scene(dir, "ball.json", kBall);
+  const std::vector<glm::dvec3> four = {{0, 0, 0}, {1, 0, 0}, {0, 1, 0}, {0, 0, 1}};
+  const std::string f8 = raw<double>(four);
+  std::vector<glm::dvec3> nan = four, inf = four;
+  nan[1].z = std::nan("");
+  inf[3].x = -HUGE_VAL;
+  const std::string good = npy_bytes(npy_dict("<f8", "(4, 3)"), f8);
+  struct Case {
+    std::string name, bytes, expected;
+  };
+  const std::vector<Case> cases = {
+      {"empty", "", "not a .npy file"},
+      {"magic", "\x93NUMPX" + good.substr(6), "not a .npy file"},
+      {"version", good.substr(0, 6) + '\x03' + good.substr(7), ".npy format version 3.0 is not supported"},
+      {"header_cut", good.substr(0, 40), "truncated .npy header"},
+      {"header_syntax", npy_bytes("{'descr' '<f8'}", f8), "the .npy header does not parse"},
+      {"no_shape", npy_bytes("{'descr': '<f8', 'fortran_order': False}", f8), "the .npy header has no valid 'shape' entry"},
+      {"big_endian", npy_bytes(npy_dict(">f8", "(4, 3)"), f8), "unsupported dtype '>f8'"},
+      {"int", npy_bytes(npy_dict("<i4", "(4, 3)"), f8), "unsupported dtype '<i4'"},
+      {"fortran", npy_bytes(npy_dict("<f8", "(4, 3)", true), f8), "fortran_order is True"},
+      {"columns", npy_bytes(npy_dict("<f8", "(6, 2)"), f8), "shape (6, 2) is not (N, 3)"},
+      {"flat", npy_bytes(npy_dict("<f8", "(12,)"), f8), "shape (12,) is not (N, 3)"},
+      {"truncated", npy_bytes(npy_dict("<f8", "(4, 3)"), f8.substr(0, 90)), "truncated: shape (4, 3) of <f8 needs 96 bytes"},
+      {"trailing", npy_bytes(npy_dict("<f4", "(4, 3)"), f8), "48 bytes follow the (4, 3) array"},
+      {"nan", npy_bytes(npy_dict("<f4", "(4, 3)"), raw<float>(nan)), "points[1, 2] is nan, not a finite number"},
+      {"inf", npy_bytes(npy_dict("<f8", "(4, 3)"), raw<double>(inf)), "points[3, 0] is -inf, not a finite number"},
+  };
+  for (const Case& c : cases) {
+    const std::string in = (dir / (c.name + ".npy")).string();
+    test::write_file(in, c.bytes);
+    const auto r = test::run_cli("eval " + s + " --points " + in + " -o " + (dir / "out.npy").string());
+    EXPECT_EQ(r.code, 2) << c.name;
+    EXPECT_NE(r.err.find("hybridtree: " + in + ": " + c.expected), std::string::npos) << c.name << ": " << r.err;
+    EXPECT_FALSE(std::filesystem::exists(dir / "out.npy")) << c.name;
+  }
+  test::write_file(dir / "good.npy", good);
+  const auto ok = test::run_cli("eval " + s + " --points " + (dir / "good.npy").string() + " -o " + (dir / "out.npy").string());
+  ASSERT_EQ(ok.code, 0) << ok.err;
+  EXPECT_EQ(read_npy_output(dir / "out.npy", "<f8", "(4,)"), (std::vector<double>{1, 0.421875, 0.421875, 0.421875}));
+  const std::string missing = (dir / "no" / "out.npy").string();
+  const auto folder = test::run_cli("eval " + s + " --points " + (dir / "good.npy").string() + " -o " + missing);
+  EXPECT_EQ(folder.code, 2);
+  EXPECT_NE(folder.err.find(missing + ": cannot write the output file"), std::string::npos) << folder.err;
+  // Only the inputs and the one good output are left: no temporary survives a refusal.
+  std::size_t files = 0;
+  for (const auto& e : std::filesystem::directory_iterator(dir)) {
+    ++files;
+    EXPECT_EQ(e.path().string().find(".partial"), std::string::npos) << e.path();
+  }
+  EXPECT_EQ(files, cases.size() + 3);  // the cases, ball.json, good.npy, out.npy
   std::filesystem::remove_all(dir);
 }

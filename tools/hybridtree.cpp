@@ -1,6 +1,6 @@
 // hybridtree: the command-line face of the library.
 //   hybridtree info SCENE                  what the scene holds and what it costs
-//   hybridtree eval SCENE [--points FILE]  field values (and gradients) at points
+//   hybridtree eval SCENE [--points FILE]  field values (and gradients) at points (text or .npy)
 //   hybridtree mesh SCENE -o OUT           a closed triangle mesh of the scene's surface
 //   hybridtree generate snake [--count N]  a procedural scene (JSON on stdout)
 // Exit codes: 0 success, 2 bad input (scene, points, arguments), 1 anything else.
@@ -14,63 +14,29 @@
 #include "runtime/tape.hpp"
 #include "runtime/tape_eval.hpp"
 #include "runtime/tree_eval.hpp"
+#include "tools/cli_io.hpp"
+#include "tools/npy.hpp"
 #include "tools/scenes.hpp"
 
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
 #include <tbb/global_control.h>
+#include <tbb/task_arena.h>
 #include <unistd.h>
 
 #include <array>
 #include <atomic>
 #include <csignal>
 #include <chrono>
-#include <cmath>
 #include <cstdio>
-#include <fstream>
 #include <functional>
-#include <iostream>
 #include <map>
-#include <sstream>
 #include <string>
 #include <vector>
 
 namespace {
 
-struct InputError : std::runtime_error {
-  using std::runtime_error::runtime_error;
-};
-
-// Points: whitespace-separated x y z, one point per line; blank lines and '#' comments skipped.
-std::vector<glm::dvec3> read_points(std::istream& in, const std::string& source) {
-  std::vector<glm::dvec3> points;
-  std::string line;
-  std::size_t number = 0;
-  while (std::getline(in, line)) {
-    ++number;
-    const auto hash = line.find('#');
-    if (hash != std::string::npos) line.resize(hash);
-    std::istringstream words(line);
-    std::vector<std::string> tokens;
-    for (std::string w; words >> w;) tokens.push_back(w);
-    if (tokens.empty()) continue;
-    auto where = [&] { return source + ":" + std::to_string(number) + ": "; };
-    if (tokens.size() != 3)
-      throw InputError(where() + "expected 3 numbers \"x y z\", found " + std::to_string(tokens.size()) + " values");
-    glm::dvec3 p;
-    for (int i = 0; i < 3; ++i) {
-      const std::string& t = tokens[std::size_t(i)];
-      char* end = nullptr;
-      const double v = std::strtod(t.c_str(), &end);
-      if (end == t.c_str() || *end != '\0') throw InputError(where() + "\"" + t + "\" is not a number");
-      if (!std::isfinite(v)) throw InputError(where() + "\"" + t + "\" is not a finite number");
-      p[i] = v;
-    }
-    points.push_back(p);
-  }
-  if (in.bad()) throw InputError(source + ": read error");
-  return points;
-}
+using ht::cli::InputError;
 
 // The precision a scene asks for: --precision, else the scene's mesher.precision, else 1/100 of
 // its solid's size (1 for an empty solid).
@@ -160,46 +126,59 @@ int cmd_info(const std::string& scene) {
   return 0;
 }
 
-int cmd_eval(const std::string& scene, const std::string& points_file, bool gradient, const std::string& engine) {
-  const ht::Tree loaded = ht::load_scene(scene);
-  const ht::Tree tree = ready(loaded, default_precision(loaded, 0.0), scene);
-  if (engine == "tape") {
-    try {
-      tree.evaluator();
-    } catch (const ht::CompileError& e) {
-      throw InputError(scene + ": " + e.what());
-    }
-  }
-  std::vector<glm::dvec3> points;
-  if (points_file.empty() || points_file == "-") {
-    points = read_points(std::cin, "<stdin>");
-  } else {
-    std::ifstream in(points_file);
-    if (!in) throw InputError(points_file + ": cannot open the points file");
-    points = read_points(in, points_file);
-  }
+struct EvalArgs {
+  std::string scene, points, output, engine = "tape";  // points, output: empty or "-" = stdin, stdout
+  bool gradient = false;
+  int threads = 0;
+};
+
+// One row per point: the value, then the gradient if asked. Every engine is parallel over
+// points (TBB) and computes each point alone, so the table is the same at any thread count.
+std::vector<double> evaluate(const ht::Tree& tree, const EvalArgs& a, std::span<const glm::dvec3> points) {
   std::vector<double> values(points.size());
   std::vector<glm::dvec3> grads;
-  if (gradient) grads.resize(points.size());
-  if (engine == "tape") {
-    if (gradient)
+  if (a.gradient) grads.resize(points.size());
+  if (a.engine == "tape") {
+    if (a.gradient)
       tree.evaluator().gradient(points, values, grads);
     else
       tree.field(points, values);
   } else {
     tree.reference(points, values);
-    if (gradient) tree.reference_gradient(points, grads);
+    if (a.gradient) tree.reference_gradient(points, grads);
   }
-  std::string out;
-  char buf[160];
+  if (!a.gradient) return values;
+  std::vector<double> table(4 * points.size());
   for (std::size_t i = 0; i < points.size(); ++i) {
-    if (gradient)
-      std::snprintf(buf, sizeof buf, "%.9g %.9g %.9g %.9g\n", values[i], grads[i].x, grads[i].y, grads[i].z);
-    else
-      std::snprintf(buf, sizeof buf, "%.9g\n", values[i]);
-    out += buf;
+    table[4 * i] = values[i];
+    for (int j = 0; j < 3; ++j) table[4 * i + 1 + std::size_t(j)] = grads[i][j];
   }
-  std::fwrite(out.data(), 1, out.size(), stdout);
+  return table;
+}
+
+int cmd_eval(const EvalArgs& a) {
+  const ht::Tree loaded = ht::load_scene(a.scene);
+  const ht::Tree tree = ready(loaded, default_precision(loaded, 0.0), a.scene);
+  if (a.engine == "tape") {
+    try {
+      tree.evaluator();
+    } catch (const ht::CompileError& e) {
+      throw InputError(a.scene + ": " + e.what());
+    }
+  }
+  const ht::npy::Points in = ht::cli::read_points(a.points);
+  const std::vector<double> table = evaluate(tree, a, in.points);
+  const std::size_t columns = a.gradient ? 4 : 1;
+  if (ht::npy::has_npy_extension(a.output)) {
+    ht::cli::write_file_atomically(a.output, ht::npy::encode(in.dtype, table, columns), "output file");
+    return 0;
+  }
+  const std::string text = ht::cli::format_rows(table, columns);
+  if (!a.output.empty() && a.output != "-") {
+    ht::cli::write_file_atomically(a.output, text, "output file");
+    return 0;
+  }
+  std::fwrite(text.data(), 1, text.size(), stdout);
   return std::fflush(stdout) == 0 ? 0 : 1;
 }
 
@@ -225,17 +204,6 @@ std::function<void(double)> progress_bar() {
     if (f >= 1.0) std::fprintf(stderr, "\n");
     std::fflush(stderr);
   };
-}
-
-void write_text_atomically(const std::string& file, const std::string& text) {
-  const std::string tmp = file + ".partial";
-  {
-    std::ofstream out(tmp, std::ios::binary);
-    if (!out) throw InputError(file + ": cannot write the stats file");
-    out << text;
-    if (!out.flush()) throw InputError(file + ": cannot write the stats file");
-  }
-  if (std::rename(tmp.c_str(), file.c_str()) != 0) throw InputError(file + ": cannot move the stats file into place");
 }
 
 // "trim blend", or "global (fallback: ...)" for the root's job.
@@ -424,7 +392,7 @@ int cmd_mesh(const MeshArgs& a) {
                     {"mesh_total", mesh_s},
                     {"checks", check_s},
                     {"write", write_s}};
-    write_text_atomically(a.stats_json, j.dump(2) + "\n");
+    ht::cli::write_file_atomically(a.stats_json, j.dump(2) + "\n", "stats file");
   }
   return 0;
 }
@@ -434,18 +402,23 @@ int cmd_mesh(const MeshArgs& a) {
 int main(int argc, char** argv) {
   CLI::App app{"HybridTree: a hybrid implicit/mesh modeling kernel (Allegre et al. 2004)"};
   app.require_subcommand(1);
-  std::string scene, points_file, engine = "tape";
-  bool gradient = false;
+  std::string scene;
 
   auto* info = app.add_subcommand("info", "Print what a scene holds: nodes, depth, bounds, meshes, bytes, load time");
   info->add_option("scene", scene, "Scene file (JSON, SCENE_FORMAT v1)")->required();
 
-  auto* eval = app.add_subcommand("eval", "Field values at points (x y z per line) from --points or stdin");
-  eval->add_option("scene", scene, "Scene file (JSON, SCENE_FORMAT v1)")->required();
-  eval->add_option("--points", points_file, "Points file (default: stdin)");
-  eval->add_flag("--gradient", gradient, "Also print the gradient (three more columns)");
-  eval->add_option("--engine", engine, "Evaluator: tape (compiled, float, SIMD; default) or tree (reference, double)")
+  EvalArgs eval_args;
+  auto* eval = app.add_subcommand("eval", "Field values at points (x y z per line, or .npy) from --points or stdin");
+  eval->add_option("scene", eval_args.scene, "Scene file (JSON, SCENE_FORMAT v1)")->required();
+  eval->add_option("--points", eval_args.points,
+                   "Points file: x y z per line, or FILE.npy of shape (N, 3), float32 or float64 (default: stdin)");
+  eval->add_option("-o,--output", eval_args.output,
+                   "Output file: FILE.npy (shape (N,), or (N, 4) with --gradient; the points' dtype, float32 for "
+                   "text points), else text (default: stdout)");
+  eval->add_flag("--gradient", eval_args.gradient, "Also print the gradient (three more columns)");
+  eval->add_option("--engine", eval_args.engine, "Evaluator: tape (compiled, float, SIMD; default) or tree (reference, double)")
       ->check(CLI::IsMember({"tape", "tree"}));
+  eval->add_option("--threads", eval_args.threads, "Worker threads (default: all cores)")->check(CLI::Range(1, 1024));
 
   MeshArgs mesh_args;
   auto* mesh_cmd = app.add_subcommand("mesh", "Mesh the scene's surface into a closed triangle mesh");
@@ -487,7 +460,11 @@ int main(int argc, char** argv) {
   }
   try {
     if (*info) return cmd_info(scene);
-    if (*eval) return cmd_eval(scene, points_file, gradient, engine);
+    if (*eval) {
+      if (eval_args.threads == 0) return cmd_eval(eval_args);
+      tbb::task_arena arena(eval_args.threads);
+      return arena.execute([&] { return cmd_eval(eval_args); });
+    }
     if (*mesh_cmd) {
       std::unique_ptr<tbb::global_control> limit;
       if (mesh_args.threads > 0)
@@ -504,6 +481,9 @@ int main(int argc, char** argv) {
     std::fprintf(stderr, "hybridtree: %s\n", e.what());
     return 2;
   } catch (const InputError& e) {
+    std::fprintf(stderr, "hybridtree: %s\n", e.what());
+    return 2;
+  } catch (const ht::npy::Error& e) {
     std::fprintf(stderr, "hybridtree: %s\n", e.what());
     return 2;
   } catch (const ht::MeshWriteError& e) {
