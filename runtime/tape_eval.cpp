@@ -43,6 +43,7 @@ struct Block {
   T* f;                         // frame f, axis j: f + (3 f + j) * kBlock
   float* mesh_distance;         // scratch for the mesh instruction
   std::uint8_t* mesh_inside;
+  int count;                    // the lanes that hold query points; loops run whole chunks past them
   T* reg(int r) const { return s + static_cast<std::ptrdiff_t>(r) * kBlock; }
   T* axis(int frame, int j) const { return f + static_cast<std::ptrdiff_t>(3 * frame + j) * kBlock; }
 };
@@ -84,7 +85,7 @@ HT_LANE void curve_loop(const Block<float>& b, const Instruction& ins, const flo
   alignas(64) std::uint8_t inside[kBlock];
   for (int i = 0; i < n; ++i) {
     out[i] = 0.0f;
-    inside[i] = in_box(x[i], y[i], z[i], box);
+    inside[i] = in_box(x[i], y[i], z[i], box) & (i < b.count);
   }
   std::uint16_t lane[kBlock + kChunk];
   int m = 0;
@@ -163,11 +164,14 @@ HT_LANE float mesh_value(float d, float F, float kernel) {
 void mesh_loop(const Tape& tape, const Block<float>& b, const Instruction& ins, const float* k, int n) {
   const MeshLeaf& leaf = *tape.meshes[ins.b];
   const float F = k[0], kernel = k[1], r0 = k[2], radius = k[3];
-  leaf.query_batch(b.axis(ins.a, 0), b.axis(ins.a, 1), b.axis(ins.a, 2), static_cast<std::size_t>(n), radius,
+  // Only the lanes with query points: a mesh query is too dear for padding.
+  const int m = std::min(n, b.count);
+  leaf.query_batch(b.axis(ins.a, 0), b.axis(ins.a, 1), b.axis(ins.a, 2), static_cast<std::size_t>(m), radius,
                    b.mesh_distance, b.mesh_inside);
   float* out = b.reg(ins.out);
-  for (int i = 0; i < n; ++i)
+  for (int i = 0; i < m; ++i)
     out[i] = mesh_value(pseudo_distance(b.mesh_distance[i], b.mesh_inside[i] != 0, r0), F, kernel);
+  for (int i = m; i < n; ++i) out[i] = 0.0f;
 }
 
 // With gradients: the distance's gradient is the unit vector from the nearest point.
@@ -469,14 +473,15 @@ TapeEvaluator::Workspace& TapeEvaluator::workspace() const {
 
 void TapeEvaluator::field_block(const float* x, const float* y, const float* z, int n, float* values) const {
   Workspace& ws = workspace();
-  const Block<float> b{ws.scalars.data(), ws.frames.data(), ws.mesh_distance.data(), ws.mesh_inside.data()};
+  const Block<float> b{ws.scalars.data(), ws.frames.data(), ws.mesh_distance.data(), ws.mesh_inside.data(), n};
   std::copy(x, x + n, b.axis(0, 0));
   std::copy(y, y + n, b.axis(0, 1));
   std::copy(z, z + n, b.axis(0, 2));
-  // Chunked instructions run whole chunks: the lanes past n hold a harmless point.
+  // Every instruction runs whole chunks (no scalar remainder on any build): the lanes past n
+  // hold a harmless point, and their values are never read.
   const int padded = std::min(kBlock, (n + kChunk - 1) / kChunk * kChunk);
   for (int j = 0; j < 3; ++j) std::fill(b.axis(0, j) + n, b.axis(0, j) + padded, 0.0f);
-  run_values(*tape_, b, n);
+  run_values(*tape_, b, padded);
   const float* r = b.reg(tape_->result);
   std::copy(r, r + n, values);
 }
@@ -522,9 +527,10 @@ void TapeEvaluator::gradient(std::span<const glm::dvec3> points, std::span<doubl
     const std::size_t frames = std::size_t(tape_->frames) * 3 * kBlock;
     if (ws.dual_scalars.size() < scalars) ws.dual_scalars.resize(scalars);
     if (ws.dual_frames.size() < frames) ws.dual_frames.resize(frames);
-    const Block<Dual> b{ws.dual_scalars.data(), ws.dual_frames.data(), ws.mesh_distance.data(), ws.mesh_inside.data()};
     const std::size_t at = block * kBlock;
     const int count = static_cast<int>(std::min<std::size_t>(kBlock, points.size() - at));
+    const Block<Dual> b{ws.dual_scalars.data(), ws.dual_frames.data(), ws.mesh_distance.data(), ws.mesh_inside.data(),
+                        count};
     const int padded = std::min(kBlock, (count + kChunk - 1) / kChunk * kChunk);
     for (int j = 0; j < 3; ++j) std::fill(b.axis(0, j) + count, b.axis(0, j) + padded, Dual(0.0f));
     for (int i = 0; i < count; ++i) {
