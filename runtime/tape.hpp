@@ -3,9 +3,10 @@
 //
 //   Graph --compile(node, region?)--> Tape --TapeEvaluator--> values / gradients
 //
-// Registers come in two files. A scalar register holds one field value per lane; a frame holds
-// three rows (x, y, z) of coordinates. Frame 0 is the query points; a warp writes a new frame
-// for its subtree, so coordinates are registers too and the hot loop never walks the tree.
+// One register file: a register is a row of one float per lane. A field value takes one row; a
+// frame of coordinates takes three consecutive rows (x, y, z) and is named by its first. Rows 0-2
+// are the query points; a warp writes a new frame for its subtree, so coordinates are registers
+// too and the hot loop never walks the tree.
 // Each instruction is a tight loop over the lanes of a block (the compiler vectorizes the float
 // loops; the evaluator is built for AVX-512, AVX2 and baseline x86-64 and picks at run time).
 //
@@ -22,6 +23,7 @@
 #include "runtime/aabb.hpp"
 #include "runtime/graph.hpp"
 
+#include <bit>
 #include <cstdint>
 #include <memory>
 #include <stdexcept>
@@ -67,15 +69,35 @@ enum class OpCode : std::uint8_t {
 
 const char* op_name(OpCode op);
 
-/// One instruction: 16 bytes. `out`, `a`, `b`, `c` are scalar registers or frames as the
-/// opcode says; `k` indexes the constant pool (or, for Mesh, the tape's mesh table).
+/// One instruction: 8 bytes, operands as the opcode says (registers are rows of the one file):
+///   primitives, Mesh      s[out] from frame a and the constants at k()
+///   warps                 frame out from frame a and the constants at k()
+///   Crop                  s[out] cropped in place, frame a, constants at k()
+///   Constant              s[out] = immediate()
+///   Zero                  s[out] = 0
+///   Add ... DiffRFunction s[out] = s[a] op s[b]
+///   LocalBlend*           s[out] blended in place with s[a] by the weight s[b]
+/// k() is a 24-bit index into the constant pool, kept in `b` and `hi`; a Constant's value is a
+/// float immediate in `a` and `b`.
 struct Instruction {
-  OpCode op;
-  std::uint8_t unused = 0;
-  std::uint16_t out = 0, a = 0, b = 0, c = 0;
-  std::uint32_t k = 0;
+  OpCode op = OpCode::Zero;
+  std::uint8_t hi = 0;  ///< bits 16-23 of k()
+  std::uint16_t out = 0, a = 0, b = 0;
+
+  static constexpr std::uint32_t kMaxConstant = (1u << 24) - 1;
+  std::uint32_t k() const { return std::uint32_t(b) | std::uint32_t(hi) << 16; }
+  void set_k(std::uint32_t at) {
+    b = static_cast<std::uint16_t>(at & 0xffffu);
+    hi = static_cast<std::uint8_t>(at >> 16);
+  }
+  float immediate() const { return std::bit_cast<float>(std::uint32_t(a) | std::uint32_t(b) << 16); }
+  void set_immediate(float v) {
+    const auto bits = std::bit_cast<std::uint32_t>(v);
+    a = static_cast<std::uint16_t>(bits & 0xffffu);
+    b = static_cast<std::uint16_t>(bits >> 16);
+  }
 };
-static_assert(sizeof(Instruction) == 12 || sizeof(Instruction) == 16);
+static_assert(sizeof(Instruction) == 8, "instructions stay 8 bytes: a tape streams through L1 once per block");
 
 /// Thrown when a node cannot be compiled (an ffd before meshing exists, a tree too deep).
 struct CompileError : std::runtime_error {
@@ -87,9 +109,8 @@ struct Tape {
   std::vector<float> constants;
   std::vector<const MeshLeaf*> meshes;  ///< kept alive by `graph`
   std::shared_ptr<const Graph> graph;   ///< the graph the tape came from
-  std::uint16_t scalar_registers = 0;   ///< scalar registers used
-  std::uint16_t frames = 1;             ///< frames used (frame 0 is the input)
-  std::uint16_t result = 0;             ///< the scalar register holding the root's value
+  std::uint16_t registers = 3;          ///< rows of the register file used (rows 0-2: the input frame)
+  std::uint16_t result = 0;             ///< the register holding the root's value
   float threshold = 0.5f;
 
   std::size_t size() const { return code.size(); }

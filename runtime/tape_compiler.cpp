@@ -36,7 +36,11 @@ class Compiler {
       if (iv.zero()) return kNoValue;
       if (iv.lo == iv.hi) {  // constant over the region (deep inside a mesh, say): no subtree
         const int out = alloc_scalar();
-        emit(OpCode::Constant, out, 0, 0, 0, constants({iv.lo}));
+        Instruction ins;
+        ins.op = OpCode::Constant;
+        ins.out = static_cast<std::uint16_t>(out);
+        ins.set_immediate(static_cast<float>(iv.lo));
+        tape_.code.push_back(ins);
         return out;
       }
     }
@@ -59,53 +63,65 @@ class Compiler {
     }
   }
 
-  std::uint16_t scalar_count() const { return scalar_high_; }
-  std::uint16_t frame_count() const { return frame_high_; }
+  std::uint16_t register_count() const { return high_; }
 
   int materialize(int reg) {
     if (reg != kNoValue) return reg;
     const int out = alloc_scalar();
-    emit(OpCode::Zero, out, 0, 0, 0, 0);
+    emit(OpCode::Zero, out);
     return out;
   }
 
  private:
   // -- registers --------------------------------------------------------------------------
+  // One file: values take a row, frames three consecutive rows; each kind reuses its own freed
+  // slots, and both grow the same file.
+  int grow(int rows) {
+    if (high_ + rows > std::numeric_limits<std::uint16_t>::max()) throw CompileError("too many registers");
+    const int r = high_;
+    high_ = static_cast<std::uint16_t>(high_ + rows);
+    return r;
+  }
   int alloc_scalar() {
-    if (!free_scalars_.empty()) {
-      const int r = free_scalars_.back();
-      free_scalars_.pop_back();
-      return r;
-    }
-    if (scalar_high_ == std::numeric_limits<std::uint16_t>::max()) throw CompileError("too many registers");
-    return scalar_high_++;
+    if (free_scalars_.empty()) return grow(1);
+    const int r = free_scalars_.back();
+    free_scalars_.pop_back();
+    return r;
   }
   void release_scalar(int r) {
     if (r != kNoValue) free_scalars_.push_back(r);
   }
   int alloc_frame() {
-    if (!free_frames_.empty()) {
-      const int f = free_frames_.back();
-      free_frames_.pop_back();
-      return f;
-    }
-    return frame_high_++;
+    if (free_frames_.empty()) return grow(3);
+    const int f = free_frames_.back();
+    free_frames_.pop_back();
+    return f;
   }
   void release_frame(int f) { free_frames_.push_back(f); }
 
   std::uint32_t constants(std::initializer_list<double> values) {
     const auto at = static_cast<std::uint32_t>(tape_.constants.size());
+    if (at + values.size() > Instruction::kMaxConstant)
+      throw CompileError("the tape's constants exceed " + std::to_string(Instruction::kMaxConstant) + " floats");
     for (double v : values) tape_.constants.push_back(static_cast<float>(v));
     return at;
   }
-  void emit(OpCode op, int out, int a, int b, int c, std::uint32_t k) {
+  // An instruction with register operands.
+  void emit(OpCode op, int out, int a = 0, int b = 0) {
     Instruction ins;
     ins.op = op;
     ins.out = static_cast<std::uint16_t>(out);
     ins.a = static_cast<std::uint16_t>(a);
     ins.b = static_cast<std::uint16_t>(b);
-    ins.c = static_cast<std::uint16_t>(c);
-    ins.k = k;
+    tape_.code.push_back(ins);
+  }
+  // An instruction reading frame `frame` and the constants at k.
+  void emit_k(OpCode op, int out, int frame, std::uint32_t k) {
+    Instruction ins;
+    ins.op = op;
+    ins.out = static_cast<std::uint16_t>(out);
+    ins.a = static_cast<std::uint16_t>(frame);
+    ins.set_k(k);
     tape_.code.push_back(ins);
   }
 
@@ -206,7 +222,7 @@ class Compiler {
       }
     }
     const int out = alloc_scalar();
-    emit(op, out, frame, 0, 0, k);
+    emit_k(op, out, frame, k);
     return out;
   }
 
@@ -218,10 +234,10 @@ class Compiler {
     auto it = std::find(tape_.meshes.begin(), tape_.meshes.end(), leaf);
     const auto index = static_cast<int>(it - tape_.meshes.begin());
     if (it == tape_.meshes.end()) tape_.meshes.push_back(leaf);
-    // F, kernel radius R', r0, query radius.
-    const std::uint32_t k = constants({mp.F, mp.kernel_radius, mp.r0, mp.query_radius});
+    // F, kernel radius R', r0, query radius, the mesh's index in the tape's table.
+    const std::uint32_t k = constants({mp.F, mp.kernel_radius, mp.r0, mp.query_radius, static_cast<double>(index)});
     const int out = alloc_scalar();
-    emit(OpCode::Mesh, out, frame, index, 0, k);
+    emit_k(OpCode::Mesh, out, frame, k);
     return out;
   }
 
@@ -246,7 +262,7 @@ class Compiler {
     }
     const int inner = alloc_frame();
     const std::size_t mark = tape_.code.size();
-    emit(op, inner, frame, 0, 0, at);
+    emit_k(op, inner, frame, at);
     Aabb local;
     const bool known = region && warp_child_region(g_, n, *region, local);
     const int r = node(g_.children_of(n)[0], inner, under_blend, known ? &local : nullptr, depth + 1);
@@ -265,7 +281,7 @@ class Compiler {
         acc = r;
         continue;
       }
-      emit(OpCode::Add, acc, acc, r, 0, 0);
+      emit(OpCode::Add, acc, acc, r);
       release_scalar(r);
     }
     return acc;
@@ -306,7 +322,7 @@ class Compiler {
       if (!rf && r == kNoValue && acc == kNoValue) continue;
       acc = materialize(acc);
       r = materialize(r);
-      emit(op, acc, acc, r, 0, 0);
+      emit(op, acc, acc, r);
       release_scalar(r);
     }
     return acc;
@@ -326,7 +342,7 @@ class Compiler {
       int r = node(c[i], frame, under_blend, region, depth + 1);
       acc = materialize(acc);
       r = materialize(r);
-      emit(rf ? OpCode::DiffRFunction : OpCode::DiffMinMax, acc, acc, r, 0, 0);
+      emit(rf ? OpCode::DiffRFunction : OpCode::DiffMinMax, acc, acc, r);
       release_scalar(r);
       acc_iv = {difference_field(acc_iv.lo, b_iv.hi, T_, rf), difference_field(acc_iv.hi, b_iv.lo, T_, rf)};
     }
@@ -341,7 +357,7 @@ class Compiler {
       if (w.hi <= 0.0) {  // no blending here: the union alone
         const int a = materialize(node(c[0], frame, true, region, depth + 1));
         const int b = materialize(node(c[1], frame, true, region, depth + 1));
-        emit(rf ? OpCode::RUnion : OpCode::Max, a, a, b, 0, 0);
+        emit(rf ? OpCode::RUnion : OpCode::Max, a, a, b);
         release_scalar(b);
         return a;
       }
@@ -350,7 +366,7 @@ class Compiler {
         const int b = node(c[1], frame, true, region, depth + 1);
         if (a == kNoValue) return b;
         if (b == kNoValue) return a;
-        emit(OpCode::Add, a, a, b, 0, 0);
+        emit(OpCode::Add, a, a, b);
         release_scalar(b);
         return a;
       }
@@ -358,7 +374,7 @@ class Compiler {
     const int a = materialize(node(c[0], frame, true, region, depth + 1));
     const int b = materialize(node(c[1], frame, true, region, depth + 1));
     const int r = materialize(node(c[2], frame, true, region, depth + 1));
-    emit(rf ? OpCode::LocalBlendRFunction : OpCode::LocalBlendMinMax, a, a, b, r, 0);
+    emit(rf ? OpCode::LocalBlendRFunction : OpCode::LocalBlendMinMax, a, b, r);  // in place in a
     release_scalar(b);
     release_scalar(r);
     return a;
@@ -372,7 +388,7 @@ class Compiler {
     const glm::dvec3 centre = 0.5 * (lo + hi), half = 0.5 * (hi - lo);
     const std::uint32_t k =
         constants({centre.x, centre.y, centre.z, half.x, half.y, half.z, T_ / crop_reach(p.data()), T_});
-    emit(OpCode::Crop, child, frame, child, 0, k);
+    emit_k(OpCode::Crop, child, frame, k);  // in place
     return child;
   }
 
@@ -380,7 +396,7 @@ class Compiler {
   double T_;
   Tape& tape_;
   std::vector<int> free_scalars_, free_frames_;
-  std::uint16_t scalar_high_ = 0, frame_high_ = 1;
+  std::uint16_t high_ = 3;  // rows 0-2: the input frame
 };
 
 }  // namespace
@@ -407,8 +423,12 @@ std::string Tape::listing() const {
   char line[160];
   for (std::size_t i = 0; i < code.size(); ++i) {
     const Instruction& c = code[i];
-    std::snprintf(line, sizeof line, "%5zu  %-20s out=%u a=%u b=%u c=%u k=%u\n", i, op_name(c.op), c.out, c.a, c.b, c.c,
-                  c.k);
+    if (c.op == OpCode::Constant)
+      std::snprintf(line, sizeof line, "%5zu  %-20s out=%u value=%g\n", i, op_name(c.op), c.out, double(c.immediate()));
+    else if (c.op <= OpCode::Mesh || c.op == OpCode::Crop || c.op >= OpCode::Affine)
+      std::snprintf(line, sizeof line, "%5zu  %-20s out=%u frame=%u k=%u\n", i, op_name(c.op), c.out, c.a, c.k());
+    else
+      std::snprintf(line, sizeof line, "%5zu  %-20s out=%u a=%u b=%u\n", i, op_name(c.op), c.out, c.a, c.b);
     out += line;
   }
   return out;
@@ -422,8 +442,7 @@ Tape compile_tape(std::shared_ptr<const Graph> graph, NodeId root, double thresh
   Compiler compiler(*graph, threshold, tape);
   const int r = compiler.materialize(compiler.node(root, 0, under_blend, region, 0));
   tape.result = static_cast<std::uint16_t>(r);
-  tape.scalar_registers = compiler.scalar_count();
-  tape.frames = compiler.frame_count();
+  tape.registers = compiler.register_count();
   return tape;
 }
 

@@ -23,8 +23,8 @@ using tape_ops::Dual;
 using tape_ops::V3;
 
 struct TapeEvaluator::Workspace {
-  std::vector<float> scalars, frames;  // [register][lane] and [frame][axis][lane]
-  std::vector<Dual> dual_scalars, dual_frames;
+  std::vector<float> rows;  // the register file: [register][lane]
+  std::vector<Dual> dual_rows;
   std::vector<float> mesh_distance = std::vector<float>(kBlock);
   std::vector<std::uint8_t> mesh_inside = std::vector<std::uint8_t>(kBlock);
 };
@@ -39,13 +39,12 @@ namespace {
 
 template <class T>
 struct Block {
-  T* s;                         // scalar register r: s + r * kBlock
-  T* f;                         // frame f, axis j: f + (3 f + j) * kBlock
+  T* rows;                      // register r: rows + r * kBlock; frame f, axis j: register f + j
   float* mesh_distance;         // scratch for the mesh instruction
   std::uint8_t* mesh_inside;
   int count;                    // the lanes that hold query points; loops run whole chunks past them
-  T* reg(int r) const { return s + static_cast<std::ptrdiff_t>(r) * kBlock; }
-  T* axis(int frame, int j) const { return f + static_cast<std::ptrdiff_t>(3 * frame + j) * kBlock; }
+  T* reg(int r) const { return rows + static_cast<std::ptrdiff_t>(r) * kBlock; }
+  T* axis(int frame, int j) const { return reg(frame + j); }
 };
 
 using namespace tape_ops;
@@ -162,7 +161,7 @@ HT_LANE float mesh_value(float d, float F, float kernel) {
 }
 
 void mesh_loop(const Tape& tape, const Block<float>& b, const Instruction& ins, const float* k, int n) {
-  const MeshLeaf& leaf = *tape.meshes[ins.b];
+  const MeshLeaf& leaf = *tape.meshes[static_cast<std::size_t>(k[4])];
   const float F = k[0], kernel = k[1], r0 = k[2], radius = k[3];
   // Only the lanes with query points: a mesh query is too dear for padding.
   const int m = std::min(n, b.count);
@@ -176,7 +175,7 @@ void mesh_loop(const Tape& tape, const Block<float>& b, const Instruction& ins, 
 
 // With gradients: the distance's gradient is the unit vector from the nearest point.
 void mesh_loop(const Tape& tape, const Block<Dual>& b, const Instruction& ins, const float* k, int n) {
-  const MeshLeaf& leaf = *tape.meshes[ins.b];
+  const MeshLeaf& leaf = *tape.meshes[static_cast<std::size_t>(k[4])];
   const float F = k[0], kernel = k[1], r0 = k[2], radius = k[3];
   const Dual* x = b.axis(ins.a, 0);
   const Dual* y = b.axis(ins.a, 1);
@@ -277,7 +276,7 @@ HT_LANE void run(const Tape& tape, const Block<T>& b, int n) {
   const float t = tape.threshold;
   const float* pool = tape.constants.data();
   for (const Instruction& ins : tape.code) {
-    const float* k = pool + ins.k;
+    const float* k = pool + ins.k();
     T* out = b.reg(ins.out);
     const T* ra = b.reg(ins.a);
     const T* rb = b.reg(ins.b);
@@ -295,9 +294,11 @@ HT_LANE void run(const Tape& tape, const Block<T>& b, int n) {
       case OpCode::Zero:
         for (int i = 0; i < n; ++i) out[i] = T(0.0f);
         break;
-      case OpCode::Constant:
-        for (int i = 0; i < n; ++i) out[i] = T(k[0]);
+      case OpCode::Constant: {
+        const float v = ins.immediate();
+        for (int i = 0; i < n; ++i) out[i] = T(v);
         break;
+      }
       case OpCode::Add:
         for (int i = 0; i < n; ++i) out[i] = ra[i] + rb[i];
         break;
@@ -320,17 +321,16 @@ HT_LANE void run(const Tape& tape, const Block<T>& b, int n) {
         for (int i = 0; i < n; ++i) out[i] = max_(T(0.0f), r_intersection(ra[i], T(2.0f * t) - rb[i], t));
         break;
       case OpCode::LocalBlendMinMax:
-      case OpCode::LocalBlendRFunction: {
-        const T* rc = b.reg(ins.c);
+      case OpCode::LocalBlendRFunction: {  // in place: out blended with a, weight b
         const bool rf = ins.op == OpCode::LocalBlendRFunction;
-        for (int i = 0; i < n; ++i) out[i] = local_blend(ra[i], rb[i], rc[i], t, rf);
+        for (int i = 0; i < n; ++i) out[i] = local_blend(out[i], ra[i], rb[i], t, rf);
         break;
       }
-      case OpCode::Crop: {
+      case OpCode::Crop: {  // in place
         const T* x = b.axis(ins.a, 0);
         const T* y = b.axis(ins.a, 1);
         const T* z = b.axis(ins.a, 2);
-        for (int i = 0; i < n; ++i) out[i] = crop(rb[i], V3<T>{x[i], y[i], z[i]}, k);
+        for (int i = 0; i < n; ++i) out[i] = crop(out[i], V3<T>{x[i], y[i], z[i]}, k);
         break;
       }
       case OpCode::Affine:
@@ -464,16 +464,14 @@ TapeEvaluator::~TapeEvaluator() = default;
 
 TapeEvaluator::Workspace& TapeEvaluator::workspace() const {
   Workspace& ws = impl_->workspaces.local();
-  const std::size_t scalars = std::size_t(std::max<int>(tape_->scalar_registers, 1)) * kBlock;
-  const std::size_t frames = std::size_t(tape_->frames) * 3 * kBlock;
-  if (ws.scalars.size() < scalars) ws.scalars.resize(scalars);
-  if (ws.frames.size() < frames) ws.frames.resize(frames);
+  const std::size_t rows = std::size_t(tape_->registers) * kBlock;
+  if (ws.rows.size() < rows) ws.rows.resize(rows);
   return ws;
 }
 
 void TapeEvaluator::field_block(const float* x, const float* y, const float* z, int n, float* values) const {
   Workspace& ws = workspace();
-  const Block<float> b{ws.scalars.data(), ws.frames.data(), ws.mesh_distance.data(), ws.mesh_inside.data(), n};
+  const Block<float> b{ws.rows.data(), ws.mesh_distance.data(), ws.mesh_inside.data(), n};
   std::copy(x, x + n, b.axis(0, 0));
   std::copy(y, y + n, b.axis(0, 1));
   std::copy(z, z + n, b.axis(0, 2));
@@ -523,14 +521,11 @@ void TapeEvaluator::gradient(std::span<const glm::dvec3> points, std::span<doubl
     throw std::invalid_argument("TapeEvaluator::gradient: output sizes differ from points.size()");
   for_blocks(points.size(), [&](std::size_t block) {
     Workspace& ws = workspace();
-    const std::size_t scalars = std::size_t(std::max<int>(tape_->scalar_registers, 1)) * kBlock;
-    const std::size_t frames = std::size_t(tape_->frames) * 3 * kBlock;
-    if (ws.dual_scalars.size() < scalars) ws.dual_scalars.resize(scalars);
-    if (ws.dual_frames.size() < frames) ws.dual_frames.resize(frames);
+    const std::size_t rows = std::size_t(tape_->registers) * kBlock;
+    if (ws.dual_rows.size() < rows) ws.dual_rows.resize(rows);
     const std::size_t at = block * kBlock;
     const int count = static_cast<int>(std::min<std::size_t>(kBlock, points.size() - at));
-    const Block<Dual> b{ws.dual_scalars.data(), ws.dual_frames.data(), ws.mesh_distance.data(), ws.mesh_inside.data(),
-                        count};
+    const Block<Dual> b{ws.dual_rows.data(), ws.mesh_distance.data(), ws.mesh_inside.data(), count};
     const int padded = std::min(kBlock, (count + kChunk - 1) / kChunk * kChunk);
     for (int j = 0; j < 3; ++j) std::fill(b.axis(0, j) + count, b.axis(0, j) + padded, Dual(0.0f));
     for (int i = 0; i < count; ++i) {

@@ -117,8 +117,8 @@ int cmd_info(const std::string& scene) {
     const auto t1 = std::chrono::steady_clock::now();
     const ht::Tape tape = ht::compile_tape(tree.graph_ptr(), tree.root(), tree.threshold());
     const double compile_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t1).count();
-    std::printf("tape           %zu instructions, %u scalar registers, %u frames, %zu bytes (compiled in %.3f s)\n",
-                tape.size(), tape.scalar_registers, tape.frames, tape.bytes(), compile_s);
+    std::printf("tape           %zu instructions of %zu bytes, %u registers, %zu bytes in all (compiled in %.3f s)\n",
+                tape.size(), sizeof(ht::Instruction), tape.registers, tape.bytes(), compile_s);
   } catch (const ht::CompileError& e) {
     std::printf("tape           not compiled: %s\n", e.what());
   }
