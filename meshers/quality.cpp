@@ -292,7 +292,7 @@ class Improver {
     if (m_.status(e).deleted() || m_.is_boundary(e)) return false;
     const HH h = m_.halfedge_handle(e, 0), o = m_.opposite_halfedge_handle(h);
     const VH a = m_.from_vertex_handle(h), b = m_.to_vertex_handle(h);
-    if (locked(a) || locked(b)) return false;  // the edges at a crease point are the crease's
+    if (locked(a) && locked(b)) return false;  // a crease edge (or a rim's) keeps its place
     const VH c = m_.to_vertex_handle(m_.next_halfedge_handle(h)), d = m_.to_vertex_handle(m_.next_halfedge_handle(o));
     const glm::dvec3 pa = p(a), pb = p(b), pc = p(c), pd = p(d);
     const double before = std::max(thinness(pa, pb, pc), thinness(pb, pa, pd));
