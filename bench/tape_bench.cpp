@@ -74,6 +74,19 @@ void BM_Tape(benchmark::State& state) {
 }
 BENCHMARK(BM_Tape)->ArgsProduct({{0, 1, 2}, {1, 2}})->ArgNames({"scene", "threads"})->UseRealTime()->Unit(benchmark::kMillisecond);
 
+// Values with gradients (forward mode), one thread. Args: scene.
+void BM_TapeGradient(benchmark::State& state) {
+  const Scene& s = scene(static_cast<int>(state.range(0)));
+  const TapeEvaluator& eval = s.tree.evaluator();
+  std::vector<double> values(s.points.size());
+  std::vector<glm::dvec3> gradients(s.points.size());
+  tbb::task_arena arena(1);
+  for (auto _ : state) arena.execute([&] { eval.gradient(s.points, values, gradients); });
+  state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations() * s.points.size()));
+  state.SetLabel(std::string(kNames[state.range(0)]) + " isa=" + tape_isa_name(tape_isa()));
+}
+BENCHMARK(BM_TapeGradient)->Arg(0)->Arg(1)->ArgName("scene")->UseRealTime()->Unit(benchmark::kMillisecond);
+
 void BM_Tree(benchmark::State& state) {
   const Scene& s = scene(static_cast<int>(state.range(0)));
   const std::span<const glm::dvec3> pts(s.points);

@@ -125,27 +125,37 @@ HT_LANE void curve_loop(const Block<Dual>& b, const Instruction& ins, const floa
   const float* box = k + 4;
   const float* s = k + 10;
   const int segments = static_cast<int>(s[0]);
-  for (int c0 = 0; c0 < n; c0 += kChunk) {
-    int near = 0;
-    for (int i = c0; i < c0 + kChunk; ++i) near |= in_box(x[i].v, y[i].v, z[i].v, box);
-    Dual* o = out + c0;
-    if (!near) {
-      for (int i = 0; i < kChunk; ++i) o[i] = Dual(0.0f);
-      continue;
+  // As for values, the lanes inside the support box gathered; the nearest segment found on
+  // their values (vectorized), then differentiated alone (the min's derivative is its
+  // argument's), instead of carrying derivatives through every segment.
+  std::uint16_t lane[kBlock];
+  int m = 0;
+  for (int i = 0; i < n; ++i) {
+    out[i] = Dual(0.0f);
+    lane[m] = static_cast<std::uint16_t>(i);
+    m += in_box(x[i].v, y[i].v, z[i].v, box) & (i < b.count);
+  }
+  alignas(64) float gx[kBlock], gy[kBlock], gz[kBlock], d[kBlock];
+  alignas(64) int at[kBlock];
+  for (int j = 0; j < m; ++j) {
+    gx[j] = x[lane[j]].v;
+    gy[j] = y[lane[j]].v;
+    gz[j] = z[lane[j]].v;
+    d[j] = std::numeric_limits<float>::max();
+    at[j] = 0;
+  }
+  for (int g = 0; g < segments; ++g) {
+    const float* seg = s + 1 + 7 * g;
+    for (int j = 0; j < m; ++j) {
+      const float dist = segment2(V3<float>{gx[j], gy[j], gz[j]}, seg);
+      const bool nearer = dist < d[j];
+      d[j] = nearer ? dist : d[j];
+      at[j] = nearer ? g : at[j];
     }
-    // The nearest segment found on values, then differentiated alone (the min's derivative is
-    // its argument's), instead of carrying derivatives through every segment.
-    for (int i = 0; i < kChunk; ++i) {
-      const V3<float> q{x[c0 + i].v, y[c0 + i].v, z[c0 + i].v};
-      float best = std::numeric_limits<float>::max();
-      int at = 0;
-      for (int g = 0; g < segments; ++g)
-        if (const float dist = segment2(q, s + 1 + 7 * g); dist < best) {
-          best = dist;
-          at = g;
-        }
-      o[i] = falloff2(segment2(V3<Dual>{x[c0 + i], y[c0 + i], z[c0 + i]}, s + 1 + 7 * at), k);
-    }
+  }
+  for (int j = 0; j < m; ++j) {
+    const int i = lane[j];
+    out[i] = falloff2(segment2(V3<Dual>{x[i], y[i], z[i]}, s + 1 + 7 * at[j]), k);
   }
 }
 
@@ -354,20 +364,32 @@ void run_values_avx512(const Tape& tape, const Block<float>& b, int n) { run(tap
 #endif
 void run_values_baseline(const Tape& tape, const Block<float>& b, int n) { run(tape, b, n); }
 
-using RunValues = void (*)(const Tape&, const Block<float>&, int);
+// Gradients the same way: the dual numbers' four lanes are one vector each.
+#ifdef HT_X86_BUILDS
+[[gnu::target("avx512f,avx512vl,avx512dq,avx512bw,avx2,fma,bmi2")]]
+void run_gradients_avx512(const Tape& tape, const Block<Dual>& b, int n) { run(tape, b, n); }
+[[gnu::target("avx2,fma,bmi2")]] void run_gradients_avx2(const Tape& tape, const Block<Dual>& b, int n) { run(tape, b, n); }
+[[gnu::target("sse4.2,popcnt")]] void run_gradients_sse4(const Tape& tape, const Block<Dual>& b, int n) { run(tape, b, n); }
+#endif
+void run_gradients_baseline(const Tape& tape, const Block<Dual>& b, int n) { run(tape, b, n); }
 
-RunValues builds(TapeIsa isa) {
+template <class T>
+using Run = void (*)(const Tape&, const Block<T>&, int);
+
+template <class T>
+Run<T> builds(TapeIsa isa) {
+  constexpr bool values = std::is_same_v<T, float>;
 #ifdef HT_X86_BUILDS
   switch (isa) {
-    case TapeIsa::Avx512: return run_values_avx512;
-    case TapeIsa::Avx2: return run_values_avx2;
-    case TapeIsa::Sse4: return run_values_sse4;
+    case TapeIsa::Avx512: if constexpr (values) return run_values_avx512; else return run_gradients_avx512;
+    case TapeIsa::Avx2: if constexpr (values) return run_values_avx2; else return run_gradients_avx2;
+    case TapeIsa::Sse4: if constexpr (values) return run_values_sse4; else return run_gradients_sse4;
     case TapeIsa::Baseline: break;
   }
 #else
   (void)isa;
 #endif
-  return run_values_baseline;
+  if constexpr (values) return run_values_baseline; else return run_gradients_baseline;
 }
 
 TapeIsa widest_supported() {
@@ -390,12 +412,14 @@ TapeIsa from_environment() {
 
 std::atomic<int> g_isa{-1};  // the TapeIsa in use, -1 until the first call
 
-void run_values(const Tape& tape, const Block<float>& b, int n) {
+template <class T>
+void run_build(const Tape& tape, const Block<T>& b, int n) {
   int isa = g_isa.load(std::memory_order_relaxed);
   if (isa < 0) isa = static_cast<int>(tape_isa());
-  builds(static_cast<TapeIsa>(isa))(tape, b, n);
+  builds<T>(static_cast<TapeIsa>(isa))(tape, b, n);
 }
-void run_gradients(const Tape& tape, const Block<Dual>& b, int n) { run(tape, b, n); }
+void run_values(const Tape& tape, const Block<float>& b, int n) { run_build(tape, b, n); }
+void run_gradients(const Tape& tape, const Block<Dual>& b, int n) { run_build(tape, b, n); }
 
 #undef HT_LANE
 

@@ -89,9 +89,9 @@ TEST(Tape, EqualsTheTreeOnRandomTrees) {
 }
 
 TEST(Tape, EveryInstructionSetGivesTheSameValues) {
-  // Each build of the value path (runtime/tape_eval.hpp TapeIsa) this CPU can run: equal to the
-  // tree as above, and bit for bit to the baseline build, since no build contracts or
-  // reassociates.
+  // Each build (runtime/tape_eval.hpp TapeIsa) this CPU can run: values equal to the tree as
+  // above, and values and gradients bit for bit those of the baseline build, since no build
+  // contracts or reassociates.
   std::vector<TapeIsa> builds;
   for (const TapeIsa isa : {TapeIsa::Baseline, TapeIsa::Sse4, TapeIsa::Avx2, TapeIsa::Avx512})
     if (tape_isa_supported(isa)) builds.push_back(isa);
@@ -108,11 +108,15 @@ TEST(Tape, EveryInstructionSetGivesTheSameValues) {
     const TapeEvaluator eval(std::make_shared<const Tape>(compile_tape(t.graph_ptr(), root, kT)));
     std::vector<dvec3> pts(kPoints);
     for (auto& p : pts) p = test::random_point(rng, 2.5);
-    std::vector<double> base(pts.size()), values(pts.size());
+    std::vector<double> base(pts.size()), values(pts.size()), grad_values(pts.size());
+    std::vector<dvec3> base_grad(pts.size()), grad(pts.size());
     for (const TapeIsa isa : builds) {
       force_tape_isa(isa);
       eval.field(pts, isa == TapeIsa::Baseline ? base : values);
+      eval.gradient(pts, grad_values, isa == TapeIsa::Baseline ? base_grad : grad);
       if (isa == TapeIsa::Baseline) continue;
+      for (std::size_t i = 0; i < pts.size(); ++i)
+        ASSERT_EQ(grad[i], base_grad[i]) << tape_isa_name(isa) << " gradient, trial " << trial << " point " << i;
       for (std::size_t i = 0; i < pts.size(); ++i) {
         bool conditioned = true;
         const double tree = reference_field(t.graph(), root, kT, pts[i]);
