@@ -23,6 +23,18 @@ struct Fail {
   std::string path, rule;
 };
 
+// A JSON path of a deeply nested node runs to thousands of characters: past 8 steps (a step is
+// a key with its index, ".children[0]"), the first three and the last three are kept, with the
+// count of those left out between.
+std::string shorten_path(const std::string& path) {
+  std::vector<std::size_t> steps;  // where each step after the root begins
+  for (std::size_t i = 1; i < path.size(); ++i)
+    if (path[i] == '.') steps.push_back(i);
+  if (steps.size() <= 8) return path;
+  const std::size_t head = steps[3], tail = steps[steps.size() - 3];
+  return path.substr(0, head) + "...(" + std::to_string(steps.size() - 6) + " steps)..." + path.substr(tail + 1);
+}
+
 std::string type_name(const json& v) {
   if (v.is_number()) return "a number";
   if (v.is_string()) return "a string";
@@ -346,7 +358,7 @@ Tree load_scene_text(const std::string& text, const std::filesystem::path& base_
     top.finish();
     return b.build(root);
   } catch (const Fail& f) {
-    throw SceneError(source + ": " + f.path + ": " + f.rule);
+    throw SceneError(source + ": " + shorten_path(f.path) + ": " + f.rule);
   }
 }
 
