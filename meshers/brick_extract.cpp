@@ -1,0 +1,205 @@
+// Marching tetrahedra in one brick and its vertices' placement; see meshers/brick_extract.hpp.
+// References: Kuhn's triangulation of the cube (Kuhn 1960, as used by Freudenthal); marching
+// tetrahedra (Doi & Koide 1991).
+#include "meshers/brick_extract.hpp"
+
+#include "runtime/tape_eval.hpp"
+
+#include <glm/geometric.hpp>
+
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+namespace ht::brick {
+namespace {
+
+// The six tetrahedra of Kuhn's triangulation: monotone paths from corner 000 to 111, one per
+// order of the axes. Corners are bit masks (x = 1, y = 2, z = 4).
+constexpr std::array<std::array<int, 4>, 6> kTets = {{{0, 1, 3, 7},
+                                                      {0, 1, 5, 7},
+                                                      {0, 2, 3, 7},
+                                                      {0, 2, 6, 7},
+                                                      {0, 4, 5, 7},
+                                                      {0, 4, 6, 7}}};
+
+constexpr double kMargin = 1e-3;  // keeps vertices off grid points: no degenerate triangles
+
+int local_index(glm::ivec3 l) { return l.x + kPoints * (l.y + kPoints * l.z); }
+
+}  // namespace
+
+void march(const Grid& grid, glm::ivec3 b, const std::uint8_t* label, Scratch& sc, BrickOutput& out) {
+  const glm::i64vec3 base = glm::i64vec3(b) * std::int64_t(kCells);
+  sc.keys.clear();
+  sc.ends.clear();
+  sc.cell_begin.clear();
+  out.triangles.clear();
+  auto edge = [&](glm::ivec3 p, glm::ivec3 q) {
+    const glm::ivec3 d = q - p;  // monotone: every component 0 or 1
+    const std::uint64_t key = grid.point_index(base + glm::i64vec3(p)) * 8 + std::uint64_t(d.x + 2 * d.y + 4 * d.z);
+    sc.keys.push_back(key);
+    sc.ends.push_back({local_index(p), local_index(q)});
+    return key;
+  };
+  for (int cz = 0; cz < kCells; ++cz)
+    for (int cy = 0; cy < kCells; ++cy)
+      for (int cx = 0; cx < kCells; ++cx) {
+        sc.cell_begin.push_back(static_cast<std::uint32_t>(out.triangles.size()));
+        int mask = 0;
+        glm::ivec3 corner[8];
+        for (int c = 0; c < 8; ++c) {
+          corner[c] = {cx + (c & 1), cy + ((c >> 1) & 1), cz + ((c >> 2) & 1)};
+          mask |= label[local_index(corner[c])] << c;
+        }
+        if (mask == 0 || mask == 255) continue;
+        for (const auto& tet : kTets) {
+          int in[4], out_[4], ni = 0, no = 0;
+          for (int v : tet) (label[local_index(corner[v])] ? in[ni++] : out_[no++]) = v;
+          if (ni == 0 || no == 0) continue;
+          // Orientation: normals point from the inside corners toward the outside ones.
+          glm::dvec3 cin(0.0), cout(0.0);
+          for (int i = 0; i < ni; ++i) cin += glm::dvec3(corner[in[i]]);
+          for (int i = 0; i < no; ++i) cout += glm::dvec3(corner[out_[i]]);
+          const glm::dvec3 outward = cout / double(no) - cin / double(ni);
+          auto emit = [&](std::array<std::pair<int, int>, 3> e) {
+            std::array<glm::dvec3, 3> mid;
+            for (int i = 0; i < 3; ++i) mid[i] = 0.5 * glm::dvec3(corner[e[i].first] + corner[e[i].second]);
+            if (glm::dot(glm::cross(mid[1] - mid[0], mid[2] - mid[0]), outward) < 0) std::swap(e[1], e[2]);
+            std::array<std::uint64_t, 3> tri;
+            for (int i = 0; i < 3; ++i) {
+              glm::ivec3 p = corner[e[i].first], q = corner[e[i].second];
+              if (p.x > q.x || p.y > q.y || p.z > q.z) std::swap(p, q);
+              tri[i] = edge(p, q);
+            }
+            out.triangles.push_back(tri);
+          };
+          if (ni == 1) {
+            emit({{{in[0], out_[0]}, {in[0], out_[1]}, {in[0], out_[2]}}});
+          } else if (no == 1) {
+            emit({{{out_[0], in[0]}, {out_[0], in[1]}, {out_[0], in[2]}}});
+          } else {  // a quad, cut along one diagonal
+            emit({{{in[0], out_[0]}, {in[0], out_[1]}, {in[1], out_[1]}}});
+            emit({{{in[0], out_[0]}, {in[1], out_[1]}, {in[1], out_[0]}}});
+          }
+        }
+      }
+  sc.cell_begin.push_back(static_cast<std::uint32_t>(out.triangles.size()));
+}
+
+void place_vertices(const Grid& grid, glm::ivec3 b, std::uint32_t brick_index, const float* own,
+                    const std::uint8_t* label, const TapeEvaluator& eval, double T, const Refine& refine, Scratch& sc,
+                    BrickOutput& out) {
+  const glm::i64vec3 base = glm::i64vec3(b) * std::int64_t(kCells);
+  sc.order.resize(sc.keys.size());
+  std::iota(sc.order.begin(), sc.order.end(), std::size_t(0));
+  std::sort(sc.order.begin(), sc.order.end(), [&](std::size_t x, std::size_t y) { return sc.keys[x] < sc.keys[y]; });
+  sc.unique.clear();
+  for (std::size_t i : sc.order)
+    if (sc.unique.empty() || sc.keys[sc.unique.back()] != sc.keys[i]) sc.unique.push_back(i);
+  const std::size_t nv = sc.unique.size();
+  for (auto* v : {&sc.pa, &sc.pb}) v->resize(nv);
+  for (auto* v : {&sc.fa, &sc.fb, &sc.t, &sc.span}) v->resize(nv);
+  auto& pa = sc.pa;
+  auto& pb = sc.pb;
+  auto& fa = sc.fa;
+  auto& fb = sc.fb;
+  auto& t = sc.t;
+  auto& span = sc.span;
+  for (std::size_t v = 0; v < nv; ++v) {
+    const auto [ia, ib] = sc.ends[sc.unique[v]];
+    auto pos = [&](int li) {
+      return grid.position(base + glm::i64vec3(li % kPoints, (li / kPoints) % kPoints, li / (kPoints * kPoints)));
+    };
+    // Keep the inside end as `a`.
+    const bool a_in = label[ia] != 0;
+    pa[v] = pos(a_in ? ia : ib);
+    pb[v] = pos(a_in ? ib : ia);
+    fa[v] = std::max(double(own[a_in ? ia : ib]), T);
+    fb[v] = std::min(double(own[a_in ? ib : ia]), T);
+    span[v] = fa[v] - fb[v];
+    // An inside end exactly at T (a face through the grid point) says nothing of where the
+    // solid ends along the edge: bisect there.
+    t[v] = fa[v] > T && fa[v] > fb[v] ? (fa[v] - T) / (fa[v] - fb[v]) : 0.5;
+  }
+  // Illinois false position, the brick's unconverged vertices per batch. Most converge in a
+  // few steps; those next to a crease of a min/max field need more.
+  auto& ta = sc.ta;
+  auto& tb = sc.tb;
+  ta.assign(nv, 0.0);
+  tb.assign(nv, 1.0);
+  for (auto* v : {&sc.xs, &sc.ys, &sc.zs, &sc.fv}) v->resize(nv);
+  auto& live = sc.live;
+  live.resize(nv);
+  std::iota(live.begin(), live.end(), 0u);
+  for (int step = 0; step < refine.steps && !live.empty(); ++step) {
+    const std::size_t nl = live.size();
+    for (std::size_t i = 0; i < nl; ++i) {
+      const std::uint32_t v = live[i];
+      t[v] = std::clamp(t[v], kMargin, 1.0 - kMargin);
+      const glm::dvec3 p = pa[v] + t[v] * (pb[v] - pa[v]);
+      sc.xs[i] = float(p.x);
+      sc.ys[i] = float(p.y);
+      sc.zs[i] = float(p.z);
+    }
+    for (std::size_t at = 0; at < nl; at += kBlock)
+      eval.field_block(sc.xs.data() + at, sc.ys.data() + at, sc.zs.data() + at, int(std::min<std::size_t>(kBlock, nl - at)),
+                       sc.fv.data() + at);
+    std::size_t kept = 0;
+    for (std::size_t i = 0; i < nl; ++i) {
+      const std::uint32_t v = live[i];
+      const double f = sc.fv[i];
+      if (f >= T) {
+        ta[v] = t[v];
+        fa[v] = f;
+        fb[v] = T + 0.5 * (fb[v] - T);  // Illinois: halve the stale end's weight
+      } else {
+        tb[v] = t[v];
+        fb[v] = f;
+        fa[v] = T + 0.5 * (fa[v] - T);
+      }
+      // Done when f - T, or the bracket, is a small fraction of the change across the edge.
+      // A value exactly T is a plateau of the surface along the edge (a crease line on it): the
+      // crossing is where the plateau ends, found by bisection.
+      const bool converged = (f != T && std::abs(f - T) <= refine.tolerance * span[v]) || tb[v] - ta[v] <= refine.tolerance;
+      if (converged) continue;  // t[v] is the last point evaluated
+      t[v] = fa[v] > T && fa[v] > fb[v] ? ta[v] + (fa[v] - T) / (fa[v] - fb[v]) * (tb[v] - ta[v]) : 0.5 * (ta[v] + tb[v]);
+      live[kept++] = v;
+    }
+    live.resize(kept);
+  }
+  out.vertices.resize(nv);
+  for (std::size_t v = 0; v < nv; ++v)
+    out.vertices[v] = {sc.keys[sc.unique[v]], brick_index, pa[v] + std::clamp(t[v], kMargin, 1.0 - kMargin) * (pb[v] - pa[v]),
+                       glm::vec3(0.0f)};
+}
+
+void crease_normals(const float* own, const TapeEvaluator& eval, const FeatureOptions& options, Scratch& sc,
+                    BrickOutput& out) {
+  std::uint8_t suspect[kCells * kCells * kCells];
+  mark_suspect_cells({own, std::size_t(kBrickPoints)}, kCells, options, suspect);
+  const std::size_t nv = out.vertices.size();
+  sc.wanted.assign(nv, 0);
+  for (int c = 0; c < kCells * kCells * kCells; ++c) {
+    if (!suspect[c]) continue;
+    for (std::uint32_t i = sc.cell_begin[std::size_t(c)]; i < sc.cell_begin[std::size_t(c) + 1]; ++i)
+      for (std::uint64_t key : out.triangles[i])
+        sc.wanted[std::size_t(std::lower_bound(out.vertices.begin(), out.vertices.end(), key,
+                                               [](const EdgeVertex& e, std::uint64_t k) { return e.key < k; }) -
+                              out.vertices.begin())] = 1;
+  }
+  sc.at.clear();
+  for (std::size_t v = 0; v < nv; ++v)
+    if (sc.wanted[v]) sc.at.push_back(out.vertices[v].position);
+  sc.grad.resize(sc.at.size());
+  if (!sc.at.empty()) eval.gradient(sc.at, {}, sc.grad);
+  for (std::size_t v = 0, i = 0; v < nv; ++v) {
+    if (!sc.wanted[v]) continue;
+    const double len = glm::length(sc.grad[i]);
+    // The field grows inward: the outward normal is -grad f.
+    if (len > 0 && std::isfinite(len)) out.vertices[v].normal = glm::vec3(-sc.grad[i] / len);
+    ++i;
+  }
+}
+
+}  // namespace ht::brick

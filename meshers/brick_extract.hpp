@@ -1,0 +1,104 @@
+// Marching tetrahedra in one brick of the global polygonizer's grid (meshers/polygonize.hpp),
+// and the placement of its vertices on the surface: the per-brick work, which the polygonizer
+// runs on many bricks at once. Internal to the polygonizer; the grid and brick layout live here
+// so both files agree on them.
+#pragma once
+
+#include "meshers/features.hpp"
+#include "runtime/aabb.hpp"
+
+#include <glm/vec3.hpp>
+#include <glm/gtc/type_precision.hpp>
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+namespace ht {
+
+class TapeEvaluator;
+
+namespace brick {
+
+inline constexpr int kCells = 8;              // cells per brick side
+inline constexpr int kPoints = kCells + 1;    // grid points per brick side
+inline constexpr int kBrickPoints = kPoints * kPoints * kPoints;
+
+/// The polygonizer's grid: bricks of kCells^3 cells of side h from `origin`.
+struct Grid {
+  glm::dvec3 origin;
+  double h;
+  glm::ivec3 bricks;     // bricks per axis
+  glm::i64vec3 points;   // grid points per axis: 8 * bricks + 1
+
+  std::size_t brick_count() const { return std::size_t(bricks.x) * std::size_t(bricks.y) * std::size_t(bricks.z); }
+  std::size_t brick_index(glm::ivec3 b) const {
+    return std::size_t(b.x) + std::size_t(bricks.x) * (std::size_t(b.y) + std::size_t(bricks.y) * std::size_t(b.z));
+  }
+  glm::ivec3 brick_at(std::size_t i) const {
+    return {int(i % std::size_t(bricks.x)), int((i / std::size_t(bricks.x)) % std::size_t(bricks.y)),
+            int(i / (std::size_t(bricks.x) * std::size_t(bricks.y)))};
+  }
+  Aabb box(glm::ivec3 lo, glm::ivec3 hi) const {  // bricks [lo, hi)
+    return {origin + glm::dvec3(lo) * (kCells * h), origin + glm::dvec3(hi) * (kCells * h)};
+  }
+  std::uint64_t point_index(glm::i64vec3 p) const {
+    return std::uint64_t(p.x + points.x * (p.y + points.y * p.z));
+  }
+  glm::dvec3 position(glm::i64vec3 p) const { return origin + glm::dvec3(p) * h; }
+};
+
+/// A vertex on a grid edge, keyed by the edge: lower grid point * 8 + direction (x = 1, y = 2,
+/// z = 4, monotone diagonals combine them).
+struct EdgeVertex {
+  std::uint64_t key;
+  std::uint32_t brick;
+  glm::dvec3 position;
+  glm::vec3 normal;  // outward unit normal where a crease is suspected, else zero
+};
+
+struct BrickOutput {
+  std::vector<EdgeVertex> vertices;
+  std::vector<std::array<std::uint64_t, 3>> triangles;  // edge keys
+};
+
+
+/// Working arrays of one brick's extraction, kept per thread so that the steady state allocates
+/// nothing (their capacity grows to the largest brick and stays).
+struct Scratch {
+  std::vector<std::uint64_t> keys;        // edge keys in order of creation
+  std::vector<std::array<int, 2>> ends;   // their local grid points
+  std::vector<std::uint32_t> cell_begin;  // triangles of each cell, x fastest
+  std::vector<std::size_t> order, unique;
+  std::vector<glm::dvec3> pa, pb;
+  std::vector<double> fa, fb, t, span, ta, tb;
+  std::vector<float> xs, ys, zs, fv;
+  std::vector<std::uint32_t> live;
+  std::vector<std::uint8_t> wanted;
+  std::vector<glm::dvec3> at, grad;
+};
+
+/// How vertices are placed: false-position steps and tolerance (meshers/polygonize.hpp).
+struct Refine {
+  int steps = 24;
+  double tolerance = 1e-3;
+};
+
+/// The triangles of brick `b` (keys of their vertices' edges, oriented outward) from the
+/// inside labels of its kPoints^3 grid points (x fastest); fills out.triangles and, in
+/// scratch, the edges met and each cell's first triangle.
+void march(const Grid& grid, glm::ivec3 b, const std::uint8_t* label, Scratch& scratch, BrickOutput& out);
+
+/// One vertex per distinct edge of march(): false position along the edge on `eval` (the
+/// brick's tape) from the brick's samples `own`, threshold T; fills out.vertices, sorted by key.
+void place_vertices(const Grid& grid, glm::ivec3 b, std::uint32_t brick_index, const float* own,
+                    const std::uint8_t* label, const TapeEvaluator& eval, double T, const Refine& refine,
+                    Scratch& scratch, BrickOutput& out);
+
+/// Exact outward normals (forward-mode gradients on `eval`) for the vertices of the cells whose
+/// sampled gradients spread (meshers/features.hpp mark_suspect_cells); the others keep none.
+void crease_normals(const float* own, const TapeEvaluator& eval, const FeatureOptions& options, Scratch& scratch,
+                    BrickOutput& out);
+
+}  // namespace brick
+}  // namespace ht
