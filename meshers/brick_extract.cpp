@@ -122,12 +122,14 @@ void place_vertices(const Grid& grid, glm::ivec3 b, std::uint32_t brick_index, c
     // solid ends along the edge: bisect there.
     t[v] = fa[v] > T && fa[v] > fb[v] ? (fa[v] - T) / (fa[v] - fb[v]) : 0.5;
   }
-  // Illinois false position, the brick's unconverged vertices per batch. Most converge in a
-  // few steps; those next to a crease of a min/max field need more.
+  // Illinois false position (Dowell & Jarratt 1971), the brick's unconverged vertices per batch.
+  // Most converge in a few steps; those next to a crease of a min/max field need more.
   auto& ta = sc.ta;
   auto& tb = sc.tb;
   ta.assign(nv, 0.0);
   tb.assign(nv, 1.0);
+  auto& side = sc.side;  // which end the last step replaced: 1 a, -1 b, 0 none yet
+  side.assign(nv, 0);
   for (auto* v : {&sc.xs, &sc.ys, &sc.zs, &sc.fv}) v->resize(nv);
   auto& live = sc.live;
   live.resize(nv);
@@ -149,14 +151,18 @@ void place_vertices(const Grid& grid, glm::ivec3 b, std::uint32_t brick_index, c
     for (std::size_t i = 0; i < nl; ++i) {
       const std::uint32_t v = live[i];
       const double f = sc.fv[i];
+      // Illinois: an end kept twice in a row has its weight halved, so the bracket closes from
+      // both sides instead of creeping toward the root from one.
       if (f >= T) {
         ta[v] = t[v];
         fa[v] = f;
-        fb[v] = T + 0.5 * (fb[v] - T);  // Illinois: halve the stale end's weight
+        if (side[v] > 0) fb[v] = T + 0.5 * (fb[v] - T);
+        side[v] = 1;
       } else {
         tb[v] = t[v];
         fb[v] = f;
-        fa[v] = T + 0.5 * (fa[v] - T);
+        if (side[v] < 0) fa[v] = T + 0.5 * (fa[v] - T);
+        side[v] = -1;
       }
       // Done when f - T, or the bracket, is a small fraction of the change across the edge.
       // A value exactly T is a plateau of the surface along the edge (a crease line on it): the

@@ -74,6 +74,7 @@ struct Scratch {
   std::vector<double> fa, fb, t, span, ta, tb;
   std::vector<float> xs, ys, zs, fv;
   std::vector<std::uint32_t> live;
+  std::vector<std::int8_t> side;
   std::vector<std::uint8_t> wanted;
   std::vector<glm::dvec3> at, grad;
 };

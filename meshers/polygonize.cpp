@@ -44,6 +44,7 @@ using brick::kPoints;
 constexpr double kSnap = 0.01;     // of a grid edge: a vertex this near a grid point merges there
 constexpr int kUntangleRounds = 4;  // of sliding crease points where the feature step folded
 constexpr int kUnfoldRounds = 12;   // of collapsing the folds sliding left
+constexpr int kFoldTurns = 3;       // of collapsing, then relaxing, what stays folded
 enum State : std::uint8_t { kOutside = 0, kInside = 1, kActive = 2 };
 
 double seconds_since(std::chrono::steady_clock::time_point t0) {
@@ -146,6 +147,37 @@ void snap_phase(const Grid& grid, const std::vector<EdgeVertex>& all, const Feat
   snap_to_grid_points(mesh, near, normals, snapped, field.get(), field.T, grid.h, options, &stats.snap);
 }
 
+// Folds left by the crease step or the quality pass: collapsed (meshers/unfold.hpp), and where
+// collapses are stuck, the vertices around them relaxed apart (meshers/relax.hpp untangle, crease
+// points sliding along their crease), in turns. `pairs` holds every intersecting pair and
+// receives those left.
+void resolve_folds(TriangleMesh& mesh, std::vector<std::uint8_t>& crease, const TapeEvaluator& eval, double T, double h,
+                   std::vector<std::array<std::uint32_t, 2>>& pairs, PolygonizeStats& stats) {
+  for (int turn = 0; turn < kFoldTurns && !pairs.empty(); ++turn) {
+    const UnfoldStats st = unfold(mesh, crease, pairs, kUnfoldRounds);
+    stats.unfold.collapses += st.collapses;
+    stats.unfold.seconds += st.seconds;
+    if (pairs.empty()) break;
+    Aabb near;
+    for (const auto& pair : pairs)
+      for (const std::uint32_t t : pair)
+        for (int k = 0; k < 3; ++k) near.grow(mesh.positions[mesh.triangles[t][k]]);
+    if (crease.size() != mesh.positions.size()) crease.resize(mesh.positions.size(), 0);
+    const std::vector<std::uint8_t> none(mesh.positions.size(), 0);
+    const auto left = untangle(mesh, none, eval, T, near.expanded(2.0 * h), kUntangleRounds, crease);
+    // untangle searched only its region; the pairs outside it are those unfold left there.
+    std::vector<std::array<std::uint32_t, 2>> all = left;
+    for (const auto& pair : pairs) {
+      bool inside = false;
+      for (const std::uint32_t t : pair)
+        for (int k = 0; k < 3; ++k) inside |= near.expanded(2.0 * h).contains(mesh.positions[mesh.triangles[t][k]]);
+      if (!inside) all.push_back(pair);
+    }
+    pairs = std::move(all);
+  }
+  stats.crease_intersections = pairs.size();
+}
+
 // Creases: the edges that cross them split (meshers/features.hpp); where the pieces fold into
 // each other, crease points slide along their crease and the vertices away from it relax
 // (meshers/relax.hpp untangle), and what stays folded is collapsed (meshers/unfold.hpp).
@@ -163,18 +195,17 @@ void crease_phase(RootField& field, const FeatureOptions& features, double h, Tr
   for (std::size_t v = 0; v < on_crease.size(); ++v)
     if (on_crease[v]) near.grow(mesh.positions[v]);
   const std::vector<std::uint8_t> none(mesh.positions.size(), 0);
-  const auto left = untangle(mesh, none, eval, field.T, near.expanded(2.0 * h), kUntangleRounds, on_crease);
-  stats.crease_intersections = left.size();
-  if (left.empty()) return;
-  stats.unfold = unfold(mesh, on_crease, left, kUnfoldRounds);
-  stats.crease_intersections = stats.unfold.pairs_after;
+  auto left = untangle(mesh, none, eval, field.T, near.expanded(2.0 * h), kUntangleRounds, on_crease);
+  stats.unfold.pairs_before = stats.crease_intersections = left.size();
+  resolve_folds(mesh, on_crease, eval, field.T, h, left, stats);
 }
 
 // The quality pass with the crease points and two rings around them kept as the feature step
 // left them; then, since a move can push a face through a sheet close by (a thin wing, two
 // sheets beside a crease), what it left intersecting is collapsed away too.
-void quality_phase(SurfaceField& field, double T, double h, const QualityOptions& options, TriangleMesh& mesh,
-                   const std::vector<std::uint8_t>& on_crease, PolygonizeStats& stats) {
+void quality_phase(SurfaceField& field, RootField& root_field, double h, const QualityOptions& options,
+                   TriangleMesh& mesh, const std::vector<std::uint8_t>& on_crease, PolygonizeStats& stats) {
+  const double T = root_field.T;
   const BatchField on_bricks = [&field](std::span<const glm::dvec3> p, std::span<double> v) { field.values(p, v); };
   std::vector<std::uint8_t> keep = on_crease;
   if (!keep.empty()) {
@@ -185,11 +216,7 @@ void quality_phase(SurfaceField& field, double T, double h, const QualityOptions
   improve_quality(mesh, keep, on_crease, on_bricks, T, h, options, &stats.quality, &crease_after);
   auto left = find_self_intersections(mesh, std::numeric_limits<std::size_t>::max()).examples;
   stats.quality_intersections = stats.crease_intersections = left.size();
-  if (left.empty()) return;
-  const UnfoldStats more = unfold(mesh, crease_after, std::move(left), kUnfoldRounds);
-  stats.unfold.collapses += more.collapses;
-  stats.unfold.seconds += more.seconds;
-  stats.crease_intersections = more.pairs_after;
+  if (!left.empty()) resolve_folds(mesh, crease_after, root_field.get(), T, h, left, stats);
 }
 
 }  // namespace
@@ -365,7 +392,7 @@ TriangleMesh polygonize(std::shared_ptr<const Graph> graph, NodeId root, double 
   if (options.quality.enabled && !options.brick_filter && !clipped) {
     SurfaceField field(graph, root, T, grid.origin, kCells * h);
     for (std::size_t a = 0; a < active.size(); ++a) field.adopt(grid.brick_at(active[a]), tapes[a]);
-    quality_phase(field, T, h, options.quality, mesh, on_crease, stats);
+    quality_phase(field, root_field, h, options.quality, mesh, on_crease, stats);
   }
   if (options.progress) options.progress(1.0);
   if (stats_out) *stats_out = stats;

@@ -88,10 +88,19 @@ class Collapser {
     for (const HH x : order) {
       const VH from = m_.from_vertex_handle(x);
       if (m_.property(locked_, from) || (!widely_ && crease(from) && !crease(m_.to_vertex_handle(x)))) continue;
-      if (m_.is_boundary(from) || !m_.is_collapse_ok(x) || !keeps_faces(x)) continue;
+      if (m_.is_boundary(from) || beside_rim(from, m_.to_vertex_handle(x)) || !m_.is_collapse_ok(x) || !keeps_faces(x))
+        continue;
       m_.collapse(x);
       return true;
     }
+    return false;
+  }
+
+  // OpenMesh's link check sees only the region: a neighbour of `from` on the rim may share an
+  // edge with `to` outside it, which the collapse would double. Only `to` may be on the rim.
+  bool beside_rim(VH from, VH to) const {
+    for (const VH w : m_.vv_range(from))
+      if (w != to && m_.property(locked_, w)) return true;
     return false;
   }
 
@@ -147,6 +156,10 @@ std::size_t unfold_round(TriangleMesh& mesh, std::vector<std::uint8_t>& crease,
     }
   std::sort(bad.begin(), bad.end());
   bad.erase(std::unique(bad.begin(), bad.end()), bad.end());
+  if (widely) {  // edges at the corners reach one ring further: their ends must be off the rim
+    const std::vector<std::uint8_t> any(region.size(), 1), ring = rings_around(mesh, region, any, 1);
+    for (std::size_t v = 0; v < region.size(); ++v) region[v] |= ring[v];
+  }
   const Pieces pieces = take_region(mesh, region);
   if (pieces.parts.empty()) return 0;
   const Submesh& part = pieces.parts[0];
@@ -177,7 +190,7 @@ std::size_t unfold_round(TriangleMesh& mesh, std::vector<std::uint8_t>& crease,
 
 }  // namespace
 
-UnfoldStats unfold(TriangleMesh& mesh, std::vector<std::uint8_t>& crease, std::vector<std::array<std::uint32_t, 2>> pairs,
+UnfoldStats unfold(TriangleMesh& mesh, std::vector<std::uint8_t>& crease, std::vector<std::array<std::uint32_t, 2>>& pairs,
                    int rounds) {
   const auto t0 = std::chrono::steady_clock::now();
   UnfoldStats st;
@@ -188,16 +201,22 @@ UnfoldStats unfold(TriangleMesh& mesh, std::vector<std::uint8_t>& crease, std::v
   std::vector<std::uint8_t> changed;
   bool widely = false;
   for (int round = 0; round < rounds && !pairs.empty(); ++round) {
+    // A round that leaves more pairs than it found (a collapse folding elsewhere) is undone.
+    const TriangleMesh before = mesh;
+    const std::vector<std::uint8_t> crease_before = crease;
     const std::size_t done = unfold_round(mesh, crease, pairs, widely, changed);
-    st.collapses += done;
     ++st.rounds;
-    if (done == 0) {
+    std::vector<std::array<std::uint32_t, 2>> now;
+    // Every pair found lies in the reworked region, and only triangles near it changed.
+    if (done > 0) now = intersections_near(mesh, changed, longest, everywhere);
+    if (done == 0 || now.size() >= pairs.size()) {
+      if (done > 0) mesh = before, crease = crease_before;
       if (widely) break;
       widely = true;  // the strict rules are stuck: the next round may reach further
       continue;
     }
-    // Only triangles near the reworked region can have changed: the rest keep their answer (none).
-    pairs = intersections_near(mesh, changed, longest, everywhere);
+    st.collapses += done;
+    pairs = std::move(now);
     st.pairs_after = pairs.size();
   }
   st.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

@@ -28,11 +28,12 @@ struct UnfoldStats {
 
 /// Collapses edges of the intersecting triangles `pairs` (every intersecting pair of the mesh,
 /// as untangle returns them: meshers/relax.hpp), then of those found again around what changed,
-/// at most `rounds` rounds. `crease` (one flag per vertex, may be empty) follows the renumbering.
+/// at most `rounds` rounds; a round that would leave more pairs than it found is undone.
+/// `pairs` receives the pairs left. `crease` (one flag per vertex, may be empty) follows the renumbering.
 /// The mesh stays closed, oriented and manifold; surviving vertices keep their order
 /// (meshers/submesh.hpp put_back). Deterministic. Cost: a search around the changed vertices per
 /// round (meshers/relax.hpp intersections_near) plus the region's work.
 UnfoldStats unfold(TriangleMesh& mesh, std::vector<std::uint8_t>& crease,
-                   std::vector<std::array<std::uint32_t, 2>> pairs, int rounds = 4);
+                   std::vector<std::array<std::uint32_t, 2>>& pairs, int rounds = 4);
 
 }  // namespace ht
