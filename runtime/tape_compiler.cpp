@@ -272,10 +272,33 @@ class Compiler {
   }
 
   // -- operators --------------------------------------------------------------------------
+  // A blend is a sum, and a blend's blend children are terms of the same sum: they are summed
+  // in place (depth first, in order), so a chain of binary blends however deep holds two
+  // registers, not one per level.
   int blend(NodeId n, int frame, const Aabb* region, int depth) {
     int acc = kNoValue;
-    for (NodeId c : g_.children_of(n)) {
-      const int r = node(c, frame, true, region, depth + 1);
+    std::vector<std::pair<NodeId, int>> todo;  // (blend, next child) of the blends being summed
+    todo.push_back({n, 0});
+    while (!todo.empty()) {
+      auto& [b, next] = todo.back();
+      const auto children = g_.children_of(b);
+      if (next == static_cast<int>(children.size())) {
+        todo.pop_back();
+        continue;
+      }
+      const NodeId c = children[static_cast<std::size_t>(next++)];
+      const int level = depth + static_cast<int>(todo.size());
+      if (level > kMaxDepth) throw CompileError("the tree is deeper than " + std::to_string(kMaxDepth) + " nodes");
+      const auto flat = [&] {  // not where the region makes the child 0 or a constant: node() says so
+        if (!region) return true;
+        const Interval iv = field_interval(g_, c, T_, *region, true);
+        return !iv.zero() && iv.lo != iv.hi;
+      };
+      if (g_.kind[c] == NodeKind::Blend && flat()) {
+        todo.push_back({c, 0});
+        continue;
+      }
+      const int r = node(c, frame, true, region, level);
       if (r == kNoValue) continue;  // a blend term that is 0 here
       if (acc == kNoValue) {
         acc = r;

@@ -133,6 +133,29 @@ TEST(Tape, EveryInstructionSetGivesTheSameValues) {
   EXPECT_THROW(force_tape_isa(static_cast<TapeIsa>(200)), std::invalid_argument);
 }
 
+TEST(Tape, ChainsOfBlendsHoldTwoRegisters) {
+  // 900 points blended two at a time, as a user writes them: nested to the left and to the
+  // right. Blends are summed in place, so the tape holds the input frame, the sum and one term
+  // (before, the right-deep chain held a register per level).
+  for (const bool right : {false, true}) {
+    Builder b(kT);
+    std::vector<NodeId> points;
+    for (int i = 0; i < 900; ++i) points.push_back(b.point({0.01 * i, 0.02 * (i % 7), 0.0}, {0.3}));
+    NodeId chain = points[0];
+    for (int i = 1; i < 900; ++i) chain = right ? b.blend({points[std::size_t(i)], chain}) : b.blend({chain, points[std::size_t(i)]});
+    const Tree t = b.build(chain);
+    const Tape tape = compile_tape(t.graph_ptr(), chain, kT);
+    EXPECT_EQ(tape.leaf_count(), 900u);
+    EXPECT_EQ(tape.size(), 1799u);
+    EXPECT_LE(tape.registers, 5u) << (right ? "right" : "left");
+    const TapeEvaluator eval(std::make_shared<const Tape>(tape));
+    for (const dvec3& p : {dvec3(0.5, 0.05, 0.0), dvec3(4.0, 0.1, 0.05), dvec3(8.95, 0.0, 0.0)}) {
+      const double want = reference_field(t.graph(), chain, kT, p);
+      EXPECT_NEAR(eval.field(p), want, 1e-4 * std::max(1.0, std::abs(want))) << p.x;
+    }
+  }
+}
+
 TEST(Tape, GradientsEqualTheTreeOnRandomTrees) {
   test::Rng rng(52);
   test::RandomTreeOptions opt;
