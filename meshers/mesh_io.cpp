@@ -1,5 +1,6 @@
 #include "meshers/mesh_io.hpp"
 
+#include "nodes/openmesh_io.hpp"
 #include "nodes/trimesh.hpp"
 
 #include <OpenMesh/Core/IO/MeshIO.hh>
@@ -53,9 +54,8 @@ void write_mesh(const TriangleMesh& mesh, const std::filesystem::path& file) {
   const std::filesystem::path tmp = dir / (file.stem().string() + ".partial-" + std::to_string(rd()) + ext);
   bool ok;
   {
-    // OpenMesh's IO manager is a process-wide singleton.
-    static std::mutex io_mutex;
-    std::lock_guard lock(io_mutex);
+    // The same lock as MeshLeaf::load's reads: OpenMesh's IO registry is process-wide.
+    std::lock_guard lock(openmesh_io_mutex());
     ok = OpenMesh::IO::write_mesh(holder.mesh, tmp.string(), options, 17);
   }
   std::error_code ec;

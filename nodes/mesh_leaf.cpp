@@ -7,6 +7,7 @@
 // each shell from its nesting depth and signed volume -> angle-weighted pseudo-normals.
 #include "nodes/mesh_leaf.hpp"
 
+#include "nodes/openmesh_io.hpp"
 #include "nodes/primitives.hpp"
 #include "nodes/trimesh.hpp"
 
@@ -45,14 +46,8 @@ std::string edge_text(std::uint32_t a, std::uint32_t b) {
   return "between vertices " + std::to_string(a) + " and " + std::to_string(b);
 }
 
-// OpenMesh reports through process-wide streams and its readers are singletons with state (the
-// OBJ reader keeps materials), so every use of its IO is serialised and its chatter muted: our
-// own messages say what is wrong, with the file name.
-std::mutex& openmesh_io_mutex() {
-  static std::mutex m;
-  return m;
-}
-
+// Every use of OpenMesh's IO holds openmesh_io_mutex() (nodes/openmesh_io.hpp) and its chatter
+// is muted: our own messages say what is wrong, with the file name.
 class QuietOpenMesh {
  public:
   QuietOpenMesh()

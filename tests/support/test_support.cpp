@@ -4,8 +4,11 @@
 
 #include <array>
 #include <cstdio>
+#include <exception>
 #include <fstream>
+#include <pthread.h>
 #include <sstream>
+#include <system_error>
 #include <sys/wait.h>
 #include <unistd.h>
 
@@ -75,6 +78,33 @@ Polygonized polygonize_checked(const Tree& tree, const PolygonizeOptions& option
   r.checks = check_mesh(r.mesh);
   if (!r.mesh.triangles.empty()) measure_surface_error(r.mesh, tree.evaluator(), tree.threshold(), r.checks);
   return r;
+}
+
+void run_on_stack(std::size_t bytes, const std::function<void()>& fn) {
+  struct Job {
+    const std::function<void()>* fn;
+    std::exception_ptr error;
+  } job{&fn, nullptr};
+  pthread_attr_t attr;
+  pthread_attr_init(&attr);
+  pthread_attr_setstacksize(&attr, bytes);
+  pthread_t thread;
+  const int rc = pthread_create(
+      &thread, &attr,
+      [](void* p) -> void* {
+        auto* j = static_cast<Job*>(p);
+        try {
+          (*j->fn)();
+        } catch (...) {
+          j->error = std::current_exception();
+        }
+        return nullptr;
+      },
+      &job);
+  pthread_attr_destroy(&attr);
+  if (rc != 0) throw std::system_error(rc, std::generic_category(), "pthread_create");
+  pthread_join(thread, nullptr);
+  if (job.error) std::rethrow_exception(job.error);
 }
 
 }  // namespace ht::test

@@ -5,8 +5,10 @@
 #include "meshers/mesh_checks.hpp"
 #include "meshers/mesh_plan.hpp"
 
+#include <cstddef>
 #include <cstdint>
 #include <filesystem>
+#include <functional>
 #include <random>
 #include <string>
 
@@ -28,6 +30,20 @@ struct CliResult {
   std::string out, err;
 };
 CliResult run_cli(const std::string& args, const std::string& input = "");
+
+/// True in the sanitized build (-DHYBRIDTREE_SANITIZE=ON, cmake/Sanitize.cmake), where code runs
+/// several times slower and stack frames are several times larger (the sanitizers' redzones).
+/// The one switch the tests read to adapt to it; the normal builds run every test in full.
+inline constexpr bool kSanitized =
+#ifdef HYBRIDTREE_SANITIZED
+    true;
+#else
+    false;
+#endif
+
+/// Runs fn on a thread of its own whose stack is `bytes` long and waits for it; rethrows what fn
+/// throws. For deep recursions whose frames the sanitizers inflate past the main thread's stack.
+void run_on_stack(std::size_t bytes, const std::function<void()>& fn);
 
 /// Mesh plan options at precision h with strategy s (meshers/mesh_plan.hpp).
 MeshOptions mesh_options(double h, MeshStrategy s = MeshStrategy::Auto);
