@@ -173,15 +173,26 @@ class Compiler {
       }
       case NodeKind::Curve: {
         const auto count = static_cast<std::size_t>(s[0]);
+        const std::size_t segments = count > 1 ? count - 1 : 1;
+        auto end = [&](std::size_t i) { return count > 1 ? v(1 + 3 * static_cast<int>(i + 1)) : v(1); };
         // The support box first: lanes outside it skip the segments (runtime/tape_eval.cpp).
         const Aabb support = skeleton_bounds(NodeKind::Curve, s).expanded(R);
         push3(support.lo);
         push3(support.hi);
-        constants({static_cast<double>(count > 1 ? count - 1 : 1)});
-        for (std::size_t i = 0; i + 1 < std::max<std::size_t>(count, 2); ++i) {
-          const glm::dvec3 a = v(1 + 3 * static_cast<int>(i));
-          const glm::dvec3 b = count > 1 ? v(1 + 3 * static_cast<int>(i + 1)) : a;
-          const glm::dvec3 ab = b - a;
+        constants({static_cast<double>(segments)});
+        // The box of each group of kCurveGroup segments: a chunk of points skips the groups
+        // that lie farther than what it has already found.
+        for (std::size_t g0 = 0; g0 < segments; g0 += kCurveGroup) {
+          Aabb box;
+          for (std::size_t i = g0; i < std::min(segments, g0 + kCurveGroup); ++i) {
+            box.grow(v(1 + 3 * static_cast<int>(i)));
+            box.grow(end(i));
+          }
+          push3(box.lo);
+          push3(box.hi);
+        }
+        for (std::size_t i = 0; i < segments; ++i) {
+          const glm::dvec3 a = v(1 + 3 * static_cast<int>(i)), ab = end(i) - a;
           const double len2 = glm::dot(ab, ab);
           push3(a);
           push3(ab);

@@ -60,10 +60,9 @@ HT_LANE void primitive_loop(const Block<T>& b, const Instruction& ins, const flo
 }
 
 // A curve: its polyline has dozens of segments, and most points of a block lie outside its
-// support. Values: the lanes inside the support box are gathered into a dense list first, so
-// the segments run over full vectors of points that need them (points in no order, as a user's
-// batch, leave one or two lanes of sixteen inside); the others are 0 at once. Gradients: lanes in
-// chunks of kChunk, a chunk with no lane inside the box 0 at once.
+// support. The lanes inside the support box are gathered into a dense list first, so the
+// segments run over full vectors of points that need them (points in no order, as a user's
+// batch, leave one or two lanes of sixteen inside); the others are 0 at once.
 constexpr int kChunk = 16;
 static_assert(kBlock % kChunk == 0, "blocks hold whole chunks");
 
@@ -71,22 +70,72 @@ HT_LANE bool in_box(float x, float y, float z, const float* box) {
   return (x >= box[0]) & (x <= box[3]) & (y >= box[1]) & (y <= box[4]) & (z >= box[2]) & (z <= box[5]);
 }
 
-HT_LANE void curve_loop(const Block<float>& b, const Instruction& ins, const float* k, int n) {
-  const float* x = b.axis(ins.a, 0);
-  const float* y = b.axis(ins.a, 1);
-  const float* z = b.axis(ins.a, 2);
-  float* out = b.reg(ins.out);
-  const float* box = k + 4;  // support lo(3) hi(3)
+// Squared distance from a chunk's box (lo, hi) to a segment group's box (lo(3) hi(3)).
+HT_LANE float box_gap2(const float* lo, const float* hi, const float* group) {
+  float e2 = 0.0f;
+  for (int a = 0; a < 3; ++a) {
+    const float e = std::max(std::max(group[a] - hi[a], lo[a] - group[3 + a]), 0.0f);
+    e2 += e * e;
+  }
+  return e2;
+}
+
+// The squared distance from each of `padded` gathered lanes (whole chunks) to its nearest
+// segment and, for gradients, that segment's index. A chunk runs first the group of segments
+// whose box is nearest its own, then only the groups whose box comes nearer than the farthest of
+// its lanes' distances so far (capped by R^2, where the falloff ends): a farther group cannot
+// hold a lane's nearest segment where the field is nonzero. The slack covers float rounding.
+template <bool kWhich>
+HT_LANE void nearest_segments(const float* gx, const float* gy, const float* gz, int padded, const float* k, float* d,
+                              int* at) {
   const float* s = k + 10;
   const int segments = static_cast<int>(s[0]);
-  // The box test over all lanes (vectorized), then the inside lanes listed, chunk by chunk, a
-  // chunk with none inside skipped whole.
-  alignas(64) std::uint8_t inside[kBlock];
-  for (int i = 0; i < n; ++i) {
-    out[i] = 0.0f;
-    inside[i] = in_box(x[i], y[i], z[i], box) & (i < b.count);
+  const int groups = (segments + kCurveGroup - 1) / kCurveGroup;
+  const float* boxes = s + 1;
+  const float* seg = boxes + 6 * groups;
+  for (int c0 = 0; c0 < padded; c0 += kChunk) {
+    float lo[3] = {gx[c0], gy[c0], gz[c0]}, hi[3] = {gx[c0], gy[c0], gz[c0]};
+    for (int j = c0; j < c0 + kChunk; ++j) {
+      lo[0] = std::min(lo[0], gx[j]), hi[0] = std::max(hi[0], gx[j]);
+      lo[1] = std::min(lo[1], gy[j]), hi[1] = std::max(hi[1], gy[j]);
+      lo[2] = std::min(lo[2], gz[j]), hi[2] = std::max(hi[2], gz[j]);
+      d[j] = std::numeric_limits<float>::max();
+      if constexpr (kWhich) at[j] = 0;
+    }
+    auto run = [&](int g) {
+      for (int i = g * kCurveGroup; i < std::min(segments, (g + 1) * kCurveGroup); ++i) {
+        const float* q = seg + 7 * i;
+        for (int j = c0; j < c0 + kChunk; ++j) {  // vectorized in every build
+          const float dist = segment2(V3<float>{gx[j], gy[j], gz[j]}, q);
+          if constexpr (kWhich) at[j] = dist < d[j] ? i : at[j];
+          d[j] = min_(d[j], dist);
+        }
+      }
+    };
+    int first = 0;
+    float nearest = std::numeric_limits<float>::infinity();
+    for (int g = 0; g < groups; ++g) {
+      const float e2 = box_gap2(lo, hi, boxes + 6 * g);
+      if (e2 < nearest) nearest = e2, first = g;
+    }
+    run(first);
+    for (int g = 0; g < groups; ++g) {
+      if (g == first) continue;
+      float far = 0.0f;
+      for (int j = c0; j < c0 + kChunk; ++j) far = std::max(far, d[j]);
+      if (box_gap2(lo, hi, boxes + 6 * g) > std::min(far, k[0]) * 1.0001f + 1e-12f) continue;
+      run(g);
+    }
   }
-  std::uint16_t lane[kBlock + kChunk];
+}
+
+// The lanes of a block inside the support box, listed chunk by chunk (a chunk with none inside
+// skipped whole), then padded with the first one's index to whole chunks. Returns the count.
+template <class T>
+HT_LANE int gather_lanes(const T* x, const T* y, const T* z, int n, int count, const float* box, std::uint16_t* lane,
+                         int& padded) {
+  alignas(64) std::uint8_t inside[kBlock];
+  for (int i = 0; i < n; ++i) inside[i] = in_box(val(x[i]), val(y[i]), val(z[i]), box) & (i < count);
   int m = 0;
   for (int c0 = 0; c0 < n; c0 += kChunk) {
     const int c1 = std::min(c0 + kChunk, n);
@@ -98,64 +147,47 @@ HT_LANE void curve_loop(const Block<float>& b, const Instruction& ins, const flo
       m += inside[i];
     }
   }
-  if (m == 0) return;
-  // Whole chunks of gathered lanes, the last padded with its first lane's point: the vector
-  // loops below then run no scalar remainder.
-  const int padded = (m + kChunk - 1) / kChunk * kChunk;
+  padded = (m + kChunk - 1) / kChunk * kChunk;
   for (int j = m; j < padded; ++j) lane[j] = lane[0];
-  alignas(64) float gx[kBlock + kChunk], gy[kBlock + kChunk], gz[kBlock + kChunk], d[kBlock + kChunk];
-  for (int j = 0; j < padded; ++j) {
-    gx[j] = x[lane[j]];
-    gy[j] = y[lane[j]];
-    gz[j] = z[lane[j]];
-    d[j] = std::numeric_limits<float>::max();
-  }
-  for (int g = 0; g < segments; ++g) {
-    const float* seg = s + 1 + 7 * g;
-    for (int j = 0; j < padded; ++j) d[j] = min_(d[j], segment2(V3<float>{gx[j], gy[j], gz[j]}, seg));  // vectorized in every build
-  }
-  for (int j = 0; j < m; ++j) out[lane[j]] = falloff2(d[j], k);
+  return m;
 }
 
-HT_LANE void curve_loop(const Block<Dual>& b, const Instruction& ins, const float* k, int n) {
-  const Dual* x = b.axis(ins.a, 0);
-  const Dual* y = b.axis(ins.a, 1);
-  const Dual* z = b.axis(ins.a, 2);
-  Dual* out = b.reg(ins.out);
-  const float* box = k + 4;
-  const float* s = k + 10;
-  const int segments = static_cast<int>(s[0]);
-  // As for values, the lanes inside the support box gathered; the nearest segment found on
-  // their values (vectorized), then differentiated alone (the min's derivative is its
-  // argument's), instead of carrying derivatives through every segment.
-  std::uint16_t lane[kBlock];
-  int m = 0;
-  for (int i = 0; i < n; ++i) {
-    out[i] = Dual(0.0f);
-    lane[m] = static_cast<std::uint16_t>(i);
-    m += in_box(x[i].v, y[i].v, z[i].v, box) & (i < b.count);
+template <class T>
+HT_LANE void curve_loop(const Block<T>& b, const Instruction& ins, const float* k, int n) {
+  const T* x = b.axis(ins.a, 0);
+  const T* y = b.axis(ins.a, 1);
+  const T* z = b.axis(ins.a, 2);
+  T* out = b.reg(ins.out);
+  for (int i = 0; i < n; ++i) out[i] = T(0.0f);
+  std::uint16_t lane[kBlock + kChunk];
+  int padded = 0;
+  const int m = gather_lanes(x, y, z, n, b.count, k + 4, lane, padded);
+  if (m == 0) return;
+  alignas(64) float gx[kBlock + kChunk], gy[kBlock + kChunk], gz[kBlock + kChunk], d[kBlock + kChunk];
+  alignas(64) int at[kBlock + kChunk];
+  for (int j = 0; j < padded; ++j) {
+    gx[j] = val(x[lane[j]]);
+    gy[j] = val(y[lane[j]]);
+    gz[j] = val(z[lane[j]]);
   }
-  alignas(64) float gx[kBlock], gy[kBlock], gz[kBlock], d[kBlock];
-  alignas(64) int at[kBlock];
-  for (int j = 0; j < m; ++j) {
-    gx[j] = x[lane[j]].v;
-    gy[j] = y[lane[j]].v;
-    gz[j] = z[lane[j]].v;
-    d[j] = std::numeric_limits<float>::max();
-    at[j] = 0;
-  }
-  for (int g = 0; g < segments; ++g) {
-    const float* seg = s + 1 + 7 * g;
+  constexpr bool kGradients = std::is_same_v<T, Dual>;
+  if constexpr (kGradients) {
+    nearest_segments<true>(gx, gy, gz, padded, k, d, at);
+    // The min's derivative is its argument's: the nearest segment differentiated alone.
+    const float* seg = k + 11 + 6 * ((static_cast<int>(k[10]) + kCurveGroup - 1) / kCurveGroup);
     for (int j = 0; j < m; ++j) {
-      const float dist = segment2(V3<float>{gx[j], gy[j], gz[j]}, seg);
-      const bool nearer = dist < d[j];
-      d[j] = nearer ? dist : d[j];
-      at[j] = nearer ? g : at[j];
+      const int i = lane[j];
+      out[i] = falloff2(segment2(V3<Dual>{x[i], y[i], z[i]}, seg + 7 * at[j]), k);
     }
-  }
-  for (int j = 0; j < m; ++j) {
-    const int i = lane[j];
-    out[i] = falloff2(segment2(V3<Dual>{x[i], y[i], z[i]}, s + 1 + 7 * at[j]), k);
+  } else {
+    // Values: one long vector loop per segment over every gathered lane runs faster than
+    // skipping groups chunk by chunk (a brick's chunks rarely lie beyond a group).
+    const int segments = static_cast<int>(k[10]);
+    const float* seg = k + 11 + 6 * ((segments + kCurveGroup - 1) / kCurveGroup);
+    for (int j = 0; j < padded; ++j) d[j] = std::numeric_limits<float>::max();
+    for (int i = 0; i < segments; ++i)
+      for (int j = 0; j < padded; ++j) d[j] = min_(d[j], segment2(V3<float>{gx[j], gy[j], gz[j]}, seg + 7 * i));  // vectorized in every build
+    for (int j = 0; j < m; ++j) out[lane[j]] = falloff2(d[j], k);
   }
 }
 
