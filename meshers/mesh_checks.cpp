@@ -3,6 +3,7 @@
 #include "meshers/union_find.hpp"
 
 #include "meshers/self_intersections.hpp"
+#include "meshers/surface_field.hpp"
 #include "runtime/tape_eval.hpp"
 
 #include <glm/geometric.hpp>
@@ -161,14 +162,18 @@ MeshChecks check_mesh(const TriangleMesh& mesh, bool self_intersections) {
   return c;
 }
 
-void measure_surface_error(const TriangleMesh& mesh, const TapeEvaluator& tape, double T, MeshChecks& c) {
+namespace {
+
+// f and grad f come from `gradient(points, values, gradients)`.
+template <class Gradient>
+void surface_error(const TriangleMesh& mesh, Gradient&& gradient, double T, MeshChecks& c) {
   std::vector<double> f;
   std::vector<glm::dvec3> g;
   auto measure = [&](const std::vector<glm::dvec3>& pts, double& max, double& mean) {
     if (pts.empty()) return;
     f.resize(pts.size());
     g.resize(pts.size());
-    tape.gradient(pts, f, g);
+    gradient(pts, f, g);
     double sum = 0;
     max = 0;
     for (std::size_t i = 0; i < pts.size(); ++i) {
@@ -198,6 +203,16 @@ void measure_surface_error(const TriangleMesh& mesh, const TapeEvaluator& tape, 
       c.inverted_area += 0.5 * glm::length(n);
     }
   }
+}
+
+}  // namespace
+
+void measure_surface_error(const TriangleMesh& mesh, const TapeEvaluator& tape, double T, MeshChecks& c) {
+  surface_error(mesh, [&](const auto& p, auto& f, auto& g) { tape.gradient(p, f, g); }, T, c);
+}
+
+void measure_surface_error(const TriangleMesh& mesh, SurfaceField& field, MeshChecks& c) {
+  surface_error(mesh, [&](const auto& p, auto& f, auto& g) { field.gradient(p, f, g); }, field.threshold(), c);
 }
 
 }  // namespace ht

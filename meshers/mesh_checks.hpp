@@ -12,6 +12,7 @@
 
 namespace ht {
 
+class SurfaceField;
 class TapeEvaluator;
 
 struct MeshChecks {
@@ -57,5 +58,8 @@ MeshChecks check_mesh(const TriangleMesh& mesh, bool self_intersections = true);
 
 /// Fills the surface-error fields of `checks` by evaluating f and grad f with the tape at T.
 void measure_surface_error(const TriangleMesh& mesh, const TapeEvaluator& tape, double threshold, MeshChecks& checks);
+/// The same with the field's tapes specialized to bricks (meshers/surface_field.hpp): the same
+/// figures to float rounding, at a fraction of the cost on a big tree.
+void measure_surface_error(const TriangleMesh& mesh, SurfaceField& field, MeshChecks& checks);
 
 }  // namespace ht

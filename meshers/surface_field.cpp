@@ -107,4 +107,23 @@ void SurfaceField::values(std::span<const glm::dvec3> points, std::span<double> 
   });
 }
 
+void SurfaceField::gradient(std::span<const glm::dvec3> points, std::span<double> values,
+                            std::span<glm::dvec3> gradients) {
+  const Bins b = bin(points);
+  tbb::parallel_for(std::size_t(0), b.eval.size(), [&](std::size_t r) {
+    // The run's points gathered on this task's own vectors: the evaluator runs parallel inside,
+    // and thread-local scratch would be shared with the tasks this thread takes meanwhile.
+    const std::size_t first = b.runs[r], n = b.runs[r + 1] - first;
+    std::vector<glm::dvec3> p(n), g(n);
+    std::vector<double> f(n);
+    for (std::size_t i = 0; i < n; ++i) p[i] = points[b.order[first + i].second];
+    b.eval[r]->gradient(p, f, g);
+    for (std::size_t i = 0; i < n; ++i) {
+      const std::size_t at = b.order[first + i].second;
+      if (!values.empty()) values[at] = f[i];
+      gradients[at] = g[i];
+    }
+  });
+}
+
 }  // namespace ht

@@ -45,6 +45,8 @@ class SurfaceField {
 
   /// The field at each point; values has points.size() entries.
   void values(std::span<const glm::dvec3> points, std::span<double> values);
+  /// The field (when values is not empty) and its gradient at each point.
+  void gradient(std::span<const glm::dvec3> points, std::span<double> values, std::span<glm::dvec3> gradients);
 
   double threshold() const { return threshold_; }
   std::size_t bricks() const {

@@ -9,6 +9,7 @@
 #include "meshers/mesh_io.hpp"
 #include "meshers/mesh_plan.hpp"
 #include "meshers/polygonize.hpp"
+#include "meshers/surface_field.hpp"
 #include "nodes/mesh_leaf.hpp"
 #include "runtime/scene.hpp"
 #include "runtime/tape.hpp"
@@ -323,7 +324,12 @@ int cmd_mesh(const MeshArgs& a) {
   if (mesh.triangles.empty()) std::fprintf(stderr, "hybridtree: warning: %s: the surface is empty; writing an empty mesh\n", a.scene.c_str());
   const auto t2 = clock::now();
   ht::MeshChecks checks = ht::check_mesh(mesh);
-  if (!mesh.triangles.empty()) ht::measure_surface_error(mesh, result.tree->evaluator(), tree.threshold(), checks);
+  if (!mesh.triangles.empty()) {
+    // On tapes specialized to bricks of eight cells, as the polygonizer's: a big tree's root tape
+    // would pay for every primitive at each of the vertices and face centres.
+    ht::SurfaceField field(result.tree->graph_ptr(), result.tree->root(), tree.threshold(), mesh.positions.front(), 8.0 * h);
+    ht::measure_surface_error(mesh, field, checks);
+  }
   const double check_s = std::chrono::duration<double>(clock::now() - t2).count();
   const auto t3 = clock::now();
   ht::write_mesh(mesh, a.out);
