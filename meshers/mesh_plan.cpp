@@ -181,8 +181,16 @@ std::string local_defect(const TriangleMesh& m, const LocalStats& local) {
 class Runner {
  public:
   Runner(const Tree& tree, const MeshOptions& o, std::vector<Job> jobs)
-      : tree_(tree), o_(o), graph_(tree.graph_ptr()), jobs_(std::move(jobs)), meshes_(jobs_.size()),
-        reports_(jobs_.size()), errors_(jobs_.size()), leaves_(jobs_.size()) {}
+      : tree_(tree), o_(o), owned_budget_(o.polygonize.memory_budget),
+        budget_(o.polygonize.budget ? *o.polygonize.budget : owned_budget_), graph_(tree.graph_ptr()),
+        jobs_(std::move(jobs)), meshes_(jobs_.size()), reports_(jobs_.size()), errors_(jobs_.size()),
+        leaves_(jobs_.size()) {
+    // The mesh leaves are held for the whole run.
+    for (const auto& leaf : graph_->meshes)
+      if (leaf)
+        budget_.take(double(leaf->bytes()), "mesh leaf " + leaf->name() + " (" + std::to_string(leaf->triangles().size()) +
+                                                " triangles)");
+  }
 
   void run_all();
   std::shared_ptr<const TriangleMesh> mesh(std::uint32_t j) const { return meshes_[j]; }
@@ -211,6 +219,8 @@ class Runner {
 
   const Tree& tree_;
   const MeshOptions& o_;
+  MemoryBudget owned_budget_;  // when the options bring none
+  MemoryBudget& budget_;       // every stage of the run takes from it
   std::mutex graph_mutex_, progress_mutex_;
   std::shared_ptr<const Graph> graph_;
   std::vector<Job> jobs_;
@@ -251,6 +261,10 @@ void Runner::run(std::uint32_t j) {
   try {
     meshes_[j] = execute(job, r);
     r.triangles = meshes_[j]->triangles.size();
+    // A job's mesh is held until the run ends; a shared leaf's is the leaf's own, counted above.
+    if (job.strategy != JobStrategy::SharedLeaf)
+      budget_.take(24.0 * double(meshes_[j]->positions.size()) + 12.0 * double(r.triangles),
+                   "the mesh of node " + graph_->label(job.node) + " (" + std::to_string(r.triangles) + " triangles)");
   } catch (...) {
     errors_[j] = std::current_exception();
   }
@@ -325,6 +339,7 @@ std::shared_ptr<const TriangleMesh> Runner::execute(const Job& job, NodeReport& 
 std::shared_ptr<const TriangleMesh> Runner::global(NodeId n, const std::shared_ptr<const Graph>& g, NodeReport& r,
                                                    bool report_progress) {
   PolygonizeOptions p = o_.polygonize;
+  p.budget = &budget_;
   p.precision = o_.precision;
   p.cancel = o_.cancel;
   p.brick_filter = {};
@@ -344,6 +359,7 @@ std::shared_ptr<const TriangleMesh> Runner::trim(const Job& job, const std::shar
   in.precision = o_.precision;
   in.child_meshes = children;
   in.polygonize = o_.polygonize;
+  in.polygonize.budget = &budget_;
   in.polygonize.cancel = o_.cancel;
   in.remesh_seams = o_.remesh_seams;
   std::string cause;
@@ -359,6 +375,8 @@ std::shared_ptr<const TriangleMesh> Runner::trim(const Job& job, const std::shar
     if (!m.triangles.empty()) cause = "the result had " + cause;
   } catch (const MeshCancelled&) {
     throw;
+  } catch (const MemoryBudgetError&) {
+    throw;  // the global strategy would need more, not less
   } catch (const std::exception& e) {
     cause = e.what();
   } catch (...) {

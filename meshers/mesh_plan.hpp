@@ -77,7 +77,9 @@ struct MeshOptions {
   MeshStrategy strategy = MeshStrategy::Auto;
   double blend_overlap = 0.5;  ///< the paper's rho threshold
   /// Memory budget, sharp features and vertex refinement of every polygonizer run (precision,
-  /// progress and cancel are set from the fields here).
+  /// progress and cancel are set from the fields here). The budget is the whole run's: the mesh
+  /// leaves, every polygonizer grid and quality pass, and every node mesh the plan keeps take
+  /// from one MemoryBudget (polygonize.budget, else one of polygonize.memory_budget bytes).
   PolygonizeOptions polygonize;
   /// The fraction of the work done, non-decreasing, ending at 1. Calls are serialized but may
   /// come from any thread.
@@ -96,8 +98,9 @@ struct MeshResult {
   std::optional<Tree> tree;
 };
 
-/// Meshes the tree's root. Throws PolygonizeError (a refused precision, an unbounded solid, an
-/// empty ffd child), MeshCancelled, CompileError. Calls on one Tree from several threads are
+/// Meshes the tree's root. Throws PolygonizeError (an unbounded solid, an empty ffd child),
+/// MemoryBudgetError (a stage that would pass the budget, before it allocates), MeshCancelled,
+/// CompileError. Calls on one Tree from several threads are
 /// independent (each run compiles its own tapes; the tree is only read).
 MeshResult mesh_tree(const Tree& tree, const MeshOptions& options);
 

@@ -51,12 +51,6 @@ double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
 }
 
-std::string gib(double bytes) {
-  char buf[64];
-  std::snprintf(buf, sizeof buf, "%.2f GiB", bytes / double(1u << 30));
-  return buf;
-}
-
 // Interval classification of brick ranges: split the longest side until one brick remains.
 void classify(const Graph& g, NodeId root, double T, const Grid& grid, glm::ivec3 lo, glm::ivec3 hi,
               std::vector<std::uint8_t>& state) {
@@ -204,7 +198,10 @@ void crease_phase(RootField& field, const FeatureOptions& features, double h, Tr
 // left them; then, since a move can push a face through a sheet close by (a thin wing, two
 // sheets beside a crease), what it left intersecting is collapsed away too.
 void quality_phase(SurfaceField& field, RootField& root_field, double h, const QualityOptions& options,
-                   TriangleMesh& mesh, const std::vector<std::uint8_t>& on_crease, PolygonizeStats& stats) {
+                   MemoryBudget& budget, TriangleMesh& mesh, const std::vector<std::uint8_t>& on_crease,
+                   PolygonizeStats& stats) {
+  const MemoryReservation held(budget, kQualityBytesPerVertex * double(mesh.positions.size()),
+                               "the quality pass on " + std::to_string(mesh.positions.size()) + " vertices");
   const double T = root_field.T;
   const BatchField on_bricks = [&field](std::span<const glm::dvec3> p, std::span<double> v) { field.values(p, v); };
   std::vector<std::uint8_t> keep = on_crease;
@@ -250,12 +247,15 @@ TriangleMesh polygonize(std::shared_ptr<const Graph> graph, NodeId root, double 
   const glm::dvec3 cells = glm::ceil(domain.size() / h);
   const glm::dvec3 bricks = glm::ceil(cells / double(kCells));
   const double brick_total = bricks.x * bricks.y * bricks.z;
-  // The brick table costs 5 bytes a brick; an active brick about 12 KiB while it is meshed.
-  const double table_bytes = 5.0 * brick_total;
-  if (table_bytes > double(options.memory_budget) || bricks.x > 2e6 || bricks.y > 2e6 || bricks.z > 2e6)
+  if (bricks.x > 2e6 || bricks.y > 2e6 || bricks.z > 2e6)
     throw PolygonizeError("precision " + std::to_string(h) + " needs a grid of " + std::to_string(cells.x) + " x " +
-                          std::to_string(cells.y) + " x " + std::to_string(cells.z) + " cells; its brick table alone needs " +
-                          gib(table_bytes) + ", over the memory budget of " + gib(double(options.memory_budget)));
+                          std::to_string(cells.y) + " x " + std::to_string(cells.z) + " cells, past 2e6 bricks a side");
+  MemoryBudget alone(options.memory_budget);
+  MemoryBudget& budget = options.budget ? *options.budget : alone;
+  // The brick table costs 5 bytes a brick; an active brick about 12 KiB while it is meshed.
+  const MemoryReservation table(budget, 5.0 * brick_total,
+                                "precision " + std::to_string(h) + ": a grid of " + std::to_string(cells.x) + " x " +
+                                    std::to_string(cells.y) + " x " + std::to_string(cells.z) + " cells, whose brick table");
   grid.bricks = glm::ivec3(bricks);
   grid.points = glm::i64vec3(grid.bricks) * std::int64_t(kCells) + std::int64_t(1);
   stats.bricks_total = grid.brick_count();
@@ -273,11 +273,9 @@ TriangleMesh polygonize(std::shared_ptr<const Graph> graph, NodeId root, double 
       if (!options.brick_filter || options.brick_filter(grid.box(b, b + 1))) active.push_back(static_cast<std::uint32_t>(i));
     }
   stats.bricks_active = active.size();
-  const double need = table_bytes + double(active.size()) * 12288.0;
-  if (need > double(options.memory_budget))
-    throw PolygonizeError("precision " + std::to_string(h) + " needs about " + gib(need) + " (" +
-                          std::to_string(active.size()) + " bricks the surface crosses), over the memory budget of " +
-                          gib(double(options.memory_budget)));
+  const MemoryReservation working(budget, double(active.size()) * 12288.0,
+                                  "precision " + std::to_string(h) + ": the " + std::to_string(active.size()) +
+                                      " bricks the surface crosses");
   std::vector<std::uint32_t> slot(grid.brick_count(), kNone);
   for (std::size_t i = 0; i < active.size(); ++i) slot[active[i]] = static_cast<std::uint32_t>(i);
   stats.seconds_classify = seconds_since(t0);
@@ -392,7 +390,7 @@ TriangleMesh polygonize(std::shared_ptr<const Graph> graph, NodeId root, double 
   if (options.quality.enabled && !options.brick_filter && !clipped) {
     SurfaceField field(graph, root, T, grid.origin, kCells * h);
     for (std::size_t a = 0; a < active.size(); ++a) field.adopt(grid.brick_at(active[a]), tapes[a]);
-    quality_phase(field, root_field, h, options.quality, mesh, on_crease, stats);
+    quality_phase(field, root_field, h, options.quality, budget, mesh, on_crease, stats);
   }
   if (options.progress) options.progress(1.0);
   if (stats_out) *stats_out = stats;

@@ -23,6 +23,7 @@
 #include "meshers/triangle_mesh.hpp"
 #include "runtime/aabb.hpp"
 #include "runtime/graph.hpp"
+#include "runtime/memory_budget.hpp"
 
 #include <atomic>
 #include <cstddef>
@@ -34,7 +35,13 @@ namespace ht {
 
 struct PolygonizeOptions {
   double precision = 0.0;                        ///< cell size (about the edge length); > 0
-  std::size_t memory_budget = std::size_t(4) << 30;  ///< bytes the polygonizer may use
+  std::size_t memory_budget = std::size_t(4) << 30;  ///< bytes the polygonizer may use (when `budget` is null)
+  /// The run's budget, shared with its other stages (runtime/memory_budget.hpp); not owned. When
+  /// set it replaces memory_budget. The polygonizer takes its brick table and active bricks
+  /// (5 bytes a brick, 12 KiB an active brick) and its quality pass (kQualityBytesPerVertex)
+  /// before allocating them, gives them back when done, and throws MemoryBudgetError when they
+  /// do not fit.
+  MemoryBudget* budget = nullptr;
   int refine_steps = 24;                         ///< at most this many false-position steps per vertex (Illinois)
   /// A vertex is done when |f - T| is below this fraction of f's change along its edge, or its
   /// bracket below this fraction of the edge.
@@ -70,8 +77,9 @@ struct PolygonizeStats {
   Aabb domain;
 };
 
-/// Thrown when the request cannot be met: a precision that would exceed the memory budget (the
-/// message says how much it would need), an unbounded solid, an ffd before meshing exists.
+/// Thrown when the request cannot be met: an unbounded solid, a grid past 2e6 bricks a side, an
+/// ffd before meshing exists. A precision that would exceed the memory budget throws
+/// MemoryBudgetError (runtime/memory_budget.hpp), whose message says how much it would need.
 struct PolygonizeError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };

@@ -34,6 +34,12 @@
 
 namespace ht {
 
+/// What the pass holds at its peak per vertex of the mesh, for memory budgets: the OpenMesh
+/// halfedge mesh (a vertex, three edges of two halfedges and two faces with their handles, status
+/// and double positions: about 160 bytes, as much again while its arrays grow) and the pass's own
+/// per-vertex arrays.
+inline constexpr double kQualityBytesPerVertex = 400.0;
+
 struct QualityOptions {
   bool enabled = true;  ///< false: meshers return what they extracted
   int iterations = 3;   ///< rounds of collapse, flip and relax

@@ -160,6 +160,11 @@ TEST(Cli, MeshRefusesCleanlyAndLeavesNoFile) {
   const auto budget = test::run_cli("mesh " + s + " -o " + (dir / "m.ply").string() + " --precision 1e-6");
   EXPECT_EQ(budget.code, 2);
   EXPECT_NE(budget.err.find("need"), std::string::npos) << budget.err;  // "needs" or "would need"
+  // A budget too small for the run: it stops before the stage that would pass it, and says so.
+  const auto quality = test::run_cli("mesh " + s + " -o " + (dir / "m.ply").string() + " --precision 0.01 --memory-budget 0.001");
+  EXPECT_EQ(quality.code, 2);
+  EXPECT_NE(quality.err.find("over the memory budget"), std::string::npos) << quality.err;
+  EXPECT_NE(quality.err.find("--memory-budget"), std::string::npos) << quality.err;
   const auto folder = test::run_cli("mesh " + s + " -o " + (dir / "no" / "m.ply").string() + " --precision 0.1");
   EXPECT_EQ(folder.code, 1);
   EXPECT_NE(folder.err.find("does not exist"), std::string::npos) << folder.err;

@@ -13,6 +13,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cmath>
 #include <atomic>
 
 using namespace ht;
@@ -152,4 +153,67 @@ TEST(MeshPlan, BlendsAboveTheOverlapThresholdPolygonizeTheirWholeSubtree) {
   const MeshResult local = mesh_tree(t, o);
   EXPECT_EQ(local.nodes.size(), 5u);
   EXPECT_TRUE(check_mesh(*local.mesh).watertight());
+}
+
+// One budget for the whole run: the stage that would pass it stops before it allocates, and the
+// message names it. Each limit is set a byte below what the stage needs on top of the others,
+// read from the peak of a run with room to spare.
+TEST(MeshPlan, EveryStageTakesFromOneMemoryBudget) {
+  Builder b(kT);
+  const auto leaf = MeshLeaf::load(test::cgal_mesh("eight.off"));
+  const NodeId blob = b.blend({b.point({0, 0, 0}, {0.6}), b.point({0.4, 0, 0}, {0.6})});
+  const Tree t = b.build(b.unite({b.mesh(leaf, {0.05}), b.affine(blob, glm::translate(glm::dmat4(1.0), dvec3(3, 0, 0)))}));
+  auto run = [&](std::size_t limit, bool quality, MemoryBudget* out = nullptr) {
+    MemoryBudget budget(limit);
+    MeshOptions o = at(0.03, MeshStrategy::Global);
+    o.polygonize.quality.enabled = quality;
+    o.polygonize.budget = out ? out : &budget;
+    return mesh_tree(t, o);
+  };
+  auto fails_at = [&](std::size_t limit, bool quality) -> std::string {
+    try {
+      run(limit, quality);
+    } catch (const MemoryBudgetError& e) {
+      EXPECT_LE(e.in_use, e.limit);
+      return e.what();
+    }
+    return "no error";
+  };
+  MemoryBudget roomy(std::size_t(8) << 30);
+  const MeshResult r = run(roomy.limit(), true, &roomy);
+  ASSERT_GT(r.mesh->triangles.size(), 0u);
+  const std::size_t with_quality = roomy.peak();
+  MemoryBudget roomy2(std::size_t(8) << 30);
+  run(roomy2.limit(), false, &roomy2);
+  const std::size_t without = roomy2.peak();
+  ASSERT_GT(with_quality, without);
+  EXPECT_NE(fails_at(leaf->bytes() - 1, true).find("mesh leaf"), std::string::npos);
+  EXPECT_NE(fails_at(with_quality - 1, true).find("quality pass on"), std::string::npos) << fails_at(with_quality - 1, true);
+  const std::string grid = fails_at(without - 1, false);
+  EXPECT_TRUE(grid.find("bricks the surface crosses") != std::string::npos || grid.find("the mesh of node") != std::string::npos)
+      << grid;
+  EXPECT_NE(grid.find("already held by this run"), std::string::npos) << grid;  // the leaf, at least
+  EXPECT_EQ(fails_at(with_quality, true), "no error");
+}
+
+TEST(MeshPlan, MemoryBudgetCountsAndRefuses) {
+  MemoryBudget b(1000);
+  b.take(600, "a");
+  EXPECT_EQ(b.in_use(), 600u);
+  EXPECT_THROW(b.take(401, "b"), MemoryBudgetError);
+  EXPECT_EQ(b.in_use(), 600u);  // a refused take holds nothing
+  {
+    const MemoryReservation r(b, 400, "c");
+    EXPECT_EQ(b.in_use(), 1000u);
+  }
+  EXPECT_EQ(b.in_use(), 600u);
+  EXPECT_EQ(b.peak(), 1000u);
+  EXPECT_THROW(b.take(std::nan(""), "nan"), MemoryBudgetError);
+  EXPECT_THROW(b.take(1e30, "huge"), MemoryBudgetError);
+  EXPECT_THROW(b.take(-1.0, "negative"), MemoryBudgetError);
+  try {
+    b.take(2048.0 * 1024 * 1024, "the thing");
+  } catch (const MemoryBudgetError& e) {
+    EXPECT_EQ(std::string(e.what()).rfind("the thing needs 2.00 GiB, over the memory budget of 1000 bytes", 0), 0u) << e.what();
+  }
 }

@@ -180,9 +180,10 @@ TEST(Polygonize, RefusesWhatItCannotDo) {
   try {
     polygonize(t.graph_ptr(), t.root(), kT, o);
     ADD_FAILURE() << "a 1e-5 precision fitted in 1 GiB";
-  } catch (const PolygonizeError& e) {
+  } catch (const MemoryBudgetError& e) {
     EXPECT_NE(std::string(e.what()).find("needs"), std::string::npos) << e.what();
     EXPECT_NE(std::string(e.what()).find("GiB"), std::string::npos) << e.what();
+    EXPECT_GT(e.needed, e.limit);
   }
   o.precision = 0.0;
   EXPECT_THROW(polygonize(t.graph_ptr(), t.root(), kT, o), PolygonizeError);

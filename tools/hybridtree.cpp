@@ -54,6 +54,8 @@ ht::Tree ready(const ht::Tree& tree, double precision, const std::string& scene)
     return ht::prepare_ffd(tree, precision);
   } catch (const ht::PolygonizeError& e) {
     throw InputError(scene + ": " + e.what());
+  } catch (const ht::MemoryBudgetError& e) {
+    throw InputError(scene + ": " + e.what());
   }
 }
 
@@ -318,6 +320,8 @@ int cmd_mesh(const MeshArgs& a) {
     throw InputError(a.scene + ": " + e.what());
   } catch (const ht::PolygonizeError& e) {
     throw InputError(a.scene + ": " + e.what());
+  } catch (const ht::MemoryBudgetError& e) {
+    throw InputError(a.scene + ": " + e.what() + "; raise --memory-budget (GiB) or coarsen --precision");
   }
   const ht::TriangleMesh& mesh = *result.mesh;
   const double mesh_s = std::chrono::duration<double>(clock::now() - t1).count();
