@@ -78,6 +78,44 @@ void classify(const Graph& g, NodeId root, double T, const Grid& grid, glm::ivec
   }
 }
 
+// Bricks of a tape block: each active brick's tape is narrowed (runtime/tape.hpp narrow_tape)
+// from the tape of its block of kTapeBlock^3 bricks, compiled from the root, so a brick pays for
+// the few instructions its block kept, not for an interval walk of the whole tree.
+constexpr int kTapeBlock = 4;
+
+// The block tapes, in the order of their block index, and each active brick's block.
+struct BlockTapes {
+  std::vector<std::shared_ptr<const Tape>> tapes;
+  std::vector<std::uint32_t> of;  // per active brick
+};
+
+BlockTapes block_tapes(const std::shared_ptr<const Graph>& graph, NodeId root, double T, const Grid& grid,
+                       const std::vector<std::uint32_t>& active) {
+  const glm::ivec3 blocks = (grid.bricks + (kTapeBlock - 1)) / kTapeBlock;
+  auto key = [&](std::uint32_t brick) {
+    const glm::ivec3 c = grid.brick_at(brick) / kTapeBlock;
+    return std::uint64_t(c.x) + std::uint64_t(blocks.x) * (std::uint64_t(c.y) + std::uint64_t(blocks.y) * std::uint64_t(c.z));
+  };
+  std::vector<std::uint64_t> keys(active.size());
+  for (std::size_t a = 0; a < active.size(); ++a) keys[a] = key(active[a]);
+  std::vector<std::uint64_t> distinct = keys;
+  std::sort(distinct.begin(), distinct.end());
+  distinct.erase(std::unique(distinct.begin(), distinct.end()), distinct.end());
+  BlockTapes out;
+  out.of.resize(active.size());
+  for (std::size_t a = 0; a < active.size(); ++a)
+    out.of[a] = std::uint32_t(std::lower_bound(distinct.begin(), distinct.end(), keys[a]) - distinct.begin());
+  out.tapes.resize(distinct.size());
+  tbb::parallel_for(std::size_t(0), distinct.size(), [&](std::size_t i) {
+    const std::uint64_t k = distinct[i];
+    const glm::ivec3 c(int(k % std::uint64_t(blocks.x)), int(k / std::uint64_t(blocks.x) % std::uint64_t(blocks.y)),
+                       int(k / (std::uint64_t(blocks.x) * std::uint64_t(blocks.y))));
+    const Aabb box = grid.box(c * kTapeBlock, glm::min(c * kTapeBlock + kTapeBlock, grid.bricks));
+    out.tapes[i] = std::make_shared<const Tape>(compile_tape(graph, root, T, &box));
+  });
+  return out;
+}
+
 // The root's tape, compiled the first time a phase needs it.
 struct RootField {
   std::shared_ptr<const Graph> graph;
@@ -293,11 +331,11 @@ TriangleMesh polygonize(std::shared_ptr<const Graph> graph, NodeId root, double 
       options.progress(base + span * double(d) / double(active.size()));
   };
   auto cancelled = [&] { return options.cancel && options.cancel->load(std::memory_order_relaxed); };
+  const BlockTapes blocks = block_tapes(graph, root, T, grid, active);
   tbb::parallel_for(std::size_t(0), active.size(), [&](std::size_t a) {
     if (cancelled()) return;
     const glm::ivec3 b = grid.brick_at(active[a]);
-    const Aabb box = grid.box(b, b + 1);
-    tapes[a] = std::make_shared<const Tape>(compile_tape(graph, root, T, &box));
+    tapes[a] = std::make_shared<const Tape>(narrow_tape(*blocks.tapes[blocks.of[a]], grid.box(b, b + 1)));
     const TapeEvaluator eval(tapes[a]);
     float xs[kBrickPoints], ys[kBrickPoints], zs[kBrickPoints];
     int n = 0;

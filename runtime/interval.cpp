@@ -5,6 +5,7 @@
 #include "nodes/operators.hpp"
 #include "nodes/primitives.hpp"
 #include "nodes/warps.hpp"
+#include "runtime/interval.hpp"
 #include "runtime/tape.hpp"
 
 #include <glm/geometric.hpp>
@@ -88,18 +89,66 @@ bool child_region(const Graph& g, NodeId n, const Aabb& box, Aabb& out) {
 
 }  // namespace
 
+namespace interval {
+
+Interval leaf(const Graph& g, NodeId n, double T, const Aabb& box) {
+  if (g.kind[n] == NodeKind::Mesh) return mesh_interval(g, n, T, box);
+  if (g.kind[n] == NodeKind::Ffd) return g.mesh[n] != kNone ? mesh_interval(g, n, T, box) : either_sign(g.params_of(n)[10]);
+  return primitive_interval(g, n, box);
+}
+
+bool warp_child_region(const Graph& g, NodeId n, const Aabb& box, Aabb& out) { return child_region(g, n, box, out); }
+
+Interval crop(const Graph& g, NodeId n, double T, const Aabb& box, Interval v) {
+  if (!box.finite()) return {std::max(0.0, std::min(v.lo, 0.0)), std::max(0.0, v.hi)};
+  const double half = 0.5 * glm::length(box.size());
+  const double h = crop_box_field(g.params_of(n).data(), T, box.center());
+  const double slope = T / crop_reach(g.params_of(n).data());  // h is slope-Lipschitz
+  return {std::max(0.0, std::min(v.lo, h - slope * half)), std::max(0.0, std::min(v.hi, h + slope * half))};
+}
+
+Interval add(Interval a, Interval b) { return {a.lo + b.lo, a.hi + b.hi}; }
+
+// Union and intersection rise with both operands, difference rises with A, falls with B.
+Interval unite(Interval a, Interval b, double T, bool rf) {
+  return {union_field(a.lo, b.lo, T, rf), union_field(a.hi, b.hi, T, rf)};
+}
+Interval intersect(Interval a, Interval b, double T, bool rf) {
+  return {intersection_field(a.lo, b.lo, T, rf), intersection_field(a.hi, b.hi, T, rf)};
+}
+Interval subtract(Interval a, Interval b, double T, bool rf) {
+  return {difference_field(a.lo, b.hi, T, rf), difference_field(a.hi, b.lo, T, rf)};
+}
+
+Interval local_blend(Interval a, Interval b, Interval r, double T, bool rf) {
+  const Interval sum = add(a, b), uni = unite(a, b, T, rf);
+  const double wlo = std::clamp(r.lo, 0.0, 1.0), whi = std::clamp(r.hi, 0.0, 1.0);
+  // f = U + w (S - U), linear in w: its range is the hull at both ends of w.
+  const Interval diff{sum.lo - uni.hi, sum.hi - uni.lo};
+  return {uni.lo + std::min(wlo * diff.lo, whi * diff.lo), uni.hi + std::max(wlo * diff.hi, whi * diff.hi)};
+}
+
+}  // namespace interval
+
 Interval field_interval(const Graph& g, NodeId n, double T, const Aabb& box, bool under_blend) {
   const auto c = g.children_of(n);
   const bool rf = use_rfunction(g.boolean[n], under_blend);
   auto child = [&](std::size_t i, bool blended) { return field_interval(g, c[i], T, box, blended); };
+  switch (kind_family(g.kind[n])) {
+    case Family::Primitive:
+    case Family::Mesh: return interval::leaf(g, n, T, box);
+    case Family::Warp: {
+      if (g.kind[n] == NodeKind::Ffd) return interval::leaf(g, n, T, box);
+      Aabb local;
+      if (!child_region(g, n, box, local)) local = Aabb::everything();
+      return field_interval(g, c[0], T, local, under_blend);
+    }
+    case Family::Operator: break;
+  }
   switch (g.kind[n]) {
-    case NodeKind::Mesh: return mesh_interval(g, n, T, box);
     case NodeKind::Blend: {
       Interval sum;
-      for (std::size_t i = 0; i < c.size(); ++i) {
-        const Interval v = child(i, true);
-        sum = {sum.lo + v.lo, sum.hi + v.hi};
-      }
+      for (std::size_t i = 0; i < c.size(); ++i) sum = interval::add(sum, child(i, true));
       return sum;
     }
     case NodeKind::Union:
@@ -108,51 +157,17 @@ Interval field_interval(const Graph& g, NodeId n, double T, const Aabb& box, boo
       Interval acc = child(0, under_blend);
       for (std::size_t i = 1; i < c.size(); ++i) {
         const Interval b = child(i, under_blend);
-        // Union and intersection rise with both operands, difference rises with A, falls with B.
-        if (g.kind[n] == NodeKind::Union)
-          acc = {union_field(acc.lo, b.lo, T, rf), union_field(acc.hi, b.hi, T, rf)};
-        else if (g.kind[n] == NodeKind::Intersection)
-          acc = {intersection_field(acc.lo, b.lo, T, rf), intersection_field(acc.hi, b.hi, T, rf)};
-        else
-          acc = {difference_field(acc.lo, b.hi, T, rf), difference_field(acc.hi, b.lo, T, rf)};
+        acc = g.kind[n] == NodeKind::Union          ? interval::unite(acc, b, T, rf)
+              : g.kind[n] == NodeKind::Intersection ? interval::intersect(acc, b, T, rf)
+                                                    : interval::subtract(acc, b, T, rf);
       }
       return acc;
     }
-    case NodeKind::LocalBlend: {
-      const Interval a = child(0, true), b = child(1, true), r = child(2, true);
-      const Interval sum{a.lo + b.lo, a.hi + b.hi};
-      const Interval uni{union_field(a.lo, b.lo, T, rf), union_field(a.hi, b.hi, T, rf)};
-      const double wlo = std::clamp(r.lo, 0.0, 1.0), whi = std::clamp(r.hi, 0.0, 1.0);
-      // f = U + w (S - U), linear in w: its range is the hull at both ends of w.
-      const Interval diff{sum.lo - uni.hi, sum.hi - uni.lo};
-      const Interval lo_end{uni.lo + std::min(wlo * diff.lo, whi * diff.lo), uni.hi + std::max(wlo * diff.hi, whi * diff.hi)};
-      return lo_end;
-    }
-    case NodeKind::Crop: {
-      const Interval v = child(0, under_blend);
-      if (!box.finite()) return {std::max(0.0, std::min(v.lo, 0.0)), std::max(0.0, v.hi)};
-      const double half = 0.5 * glm::length(box.size());
-      const double h = crop_box_field(g.params_of(n).data(), T, box.center());
-      const double slope = T / crop_reach(g.params_of(n).data());  // h is slope-Lipschitz
-      return {std::max(0.0, std::min(v.lo, h - slope * half)), std::max(0.0, std::min(v.hi, h + slope * half))};
-    }
-    case NodeKind::Affine:
-    case NodeKind::Twist:
-    case NodeKind::Taper:
-    case NodeKind::Bend: {
-      Aabb local;
-      if (!child_region(g, n, box, local)) local = Aabb::everything();
-      return field_interval(g, c[0], T, local, under_blend);
-    }
-    case NodeKind::Ffd:
-      if (g.mesh[n] != kNone) return mesh_interval(g, n, T, box);
-      return either_sign(g.params_of(n)[10]);
-    default: return primitive_interval(g, n, box);
+    case NodeKind::LocalBlend: return interval::local_blend(child(0, true), child(1, true), child(2, true), T, rf);
+    default: return interval::crop(g, n, T, box, child(0, under_blend));
   }
 }
 
-// Exposed for the compiler: the box a warp's child sees, or false when unknown.
-bool warp_child_region(const Graph& g, NodeId n, const Aabb& box, Aabb& out) { return child_region(g, n, box, out); }
 
 }  // namespace ht
 

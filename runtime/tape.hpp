@@ -85,6 +85,15 @@ struct Instruction {
   std::uint16_t out = 0, a = 0, b = 0;
 
   static constexpr std::uint32_t kMaxConstant = (1u << 24) - 1;
+  /// An instruction with register operands.
+  static Instruction make(OpCode op, int out, int a = 0, int b = 0) {
+    Instruction i;
+    i.op = op;
+    i.out = static_cast<std::uint16_t>(out);
+    i.a = static_cast<std::uint16_t>(a);
+    i.b = static_cast<std::uint16_t>(b);
+    return i;
+  }
   std::uint32_t k() const { return std::uint32_t(b) | std::uint32_t(hi) << 16; }
   void set_k(std::uint32_t at) {
     b = static_cast<std::uint16_t>(at & 0xffffu);
@@ -111,6 +120,9 @@ struct CompileError : std::runtime_error {
 
 struct Tape {
   std::vector<Instruction> code;
+  /// Per instruction, the node a leaf, warp or crop instruction came from (kNone for the
+  /// others): what narrow_tape() reads to bound it over a smaller box.
+  std::vector<NodeId> source;
   std::vector<float> constants;
   std::vector<const MeshLeaf*> meshes;  ///< kept alive by `graph`
   std::shared_ptr<const Graph> graph;   ///< the graph the tape came from
@@ -133,6 +145,14 @@ struct Tape {
 /// With `region`, the tape is specialized to that box: shorter, and equal to the full tape inside it.
 Tape compile_tape(std::shared_ptr<const Graph> graph, NodeId root, double threshold, const Aabb* region = nullptr,
                   bool under_blend = false);
+
+/// The tape specialized to `region`, made from `parent`, a tape valid over a box that holds
+/// region (or everywhere): leaves that are 0 or constant over the region are replaced, decided
+/// operations dropped, and what no longer reaches the result removed. Its values inside the
+/// region equal the parent's (to float rounding where constants replace leaves); it costs one
+/// interval pass over the parent's instructions, however big the tree behind them. The
+/// polygonizer narrows each brick's tape from a tape of a block of bricks this way.
+Tape narrow_tape(const Tape& parent, const Aabb& region);
 
 /// A conservative range of a node's field over a box (interval analysis; the compiler's pruning
 /// rules rest on it). `under_blend` as in reference_field.

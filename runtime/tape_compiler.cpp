@@ -5,6 +5,7 @@
 #include "nodes/operators.hpp"
 #include "nodes/primitives.hpp"
 #include "nodes/warps.hpp"
+#include "runtime/interval.hpp"
 #include "runtime/tape.hpp"
 
 #include <glm/geometric.hpp>
@@ -15,8 +16,6 @@
 #include <limits>
 
 namespace ht {
-
-bool warp_child_region(const Graph& g, NodeId n, const Aabb& box, Aabb& out);  // runtime/interval.cpp
 
 namespace {
 
@@ -40,7 +39,7 @@ class Compiler {
         ins.op = OpCode::Constant;
         ins.out = static_cast<std::uint16_t>(out);
         ins.set_immediate(static_cast<float>(iv.lo));
-        tape_.code.push_back(ins);
+        push(ins, kNone);
         return out;
       }
     }
@@ -107,22 +106,16 @@ class Compiler {
     return at;
   }
   // An instruction with register operands.
-  void emit(OpCode op, int out, int a = 0, int b = 0) {
-    Instruction ins;
-    ins.op = op;
-    ins.out = static_cast<std::uint16_t>(out);
-    ins.a = static_cast<std::uint16_t>(a);
-    ins.b = static_cast<std::uint16_t>(b);
+  void emit(OpCode op, int out, int a = 0, int b = 0) { push(Instruction::make(op, out, a, b), kNone); }
+  void push(const Instruction& ins, NodeId from) {
     tape_.code.push_back(ins);
+    tape_.source.push_back(from);
   }
-  // An instruction reading frame `frame` and the constants at k.
-  void emit_k(OpCode op, int out, int frame, std::uint32_t k) {
-    Instruction ins;
-    ins.op = op;
-    ins.out = static_cast<std::uint16_t>(out);
-    ins.a = static_cast<std::uint16_t>(frame);
+  // An instruction of node `from` reading frame `frame` and the constants at k.
+  void emit_k(OpCode op, NodeId from, int out, int frame, std::uint32_t k) {
+    Instruction ins = Instruction::make(op, out, frame);
     ins.set_k(k);
-    tape_.code.push_back(ins);
+    push(ins, from);
   }
 
   // -- leaves -----------------------------------------------------------------------------
@@ -233,7 +226,7 @@ class Compiler {
       }
     }
     const int out = alloc_scalar();
-    emit_k(op, out, frame, k);
+    emit_k(op, n, out, frame, k);
     return out;
   }
 
@@ -248,7 +241,7 @@ class Compiler {
     // F, kernel radius R', r0, query radius, the mesh's index in the tape's table.
     const std::uint32_t k = constants({mp.F, mp.kernel_radius, mp.r0, mp.query_radius, static_cast<double>(index)});
     const int out = alloc_scalar();
-    emit_k(OpCode::Mesh, out, frame, k);
+    emit_k(OpCode::Mesh, n, out, frame, k);
     return out;
   }
 
@@ -273,12 +266,15 @@ class Compiler {
     }
     const int inner = alloc_frame();
     const std::size_t mark = tape_.code.size();
-    emit_k(op, inner, frame, at);
+    emit_k(op, n, inner, frame, at);
     Aabb local;
-    const bool known = region && warp_child_region(g_, n, *region, local);
+    const bool known = region && interval::warp_child_region(g_, n, *region, local);
     const int r = node(g_.children_of(n)[0], inner, under_blend, known ? &local : nullptr, depth + 1);
     release_frame(inner);
-    if (r == kNoValue) tape_.code.resize(mark);  // the child vanished: so does the warp
+    if (r == kNoValue) {  // the child vanished: so does the warp
+      tape_.code.resize(mark);
+      tape_.source.resize(mark);
+    }
     return r;
   }
 
@@ -422,7 +418,7 @@ class Compiler {
     const glm::dvec3 centre = 0.5 * (lo + hi), half = 0.5 * (hi - lo);
     const std::uint32_t k =
         constants({centre.x, centre.y, centre.z, half.x, half.y, half.z, T_ / crop_reach(p.data()), T_});
-    emit_k(OpCode::Crop, child, frame, k);  // in place
+    emit_k(OpCode::Crop, n, child, frame, k);  // in place
     return child;
   }
 
