@@ -19,6 +19,7 @@
 #include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_invoke.h>
+#include <tbb/parallel_sort.h>
 #include <tbb/task_arena.h>
 
 #include <algorithm>
@@ -131,27 +132,55 @@ struct RootField {
 // One vertex per edge key across bricks (the lowest brick's copy, among those with a normal if
 // any has one), triangles renumbered into `mesh`. Returns the vertices kept, in mesh order.
 std::vector<EdgeVertex> join_bricks(const std::vector<BrickOutput>& outputs, TriangleMesh& mesh) {
-  std::vector<EdgeVertex> all;
-  std::size_t tri_count = 0;
-  for (const BrickOutput& o : outputs) {
-    all.insert(all.end(), o.vertices.begin(), o.vertices.end());
-    tri_count += o.triangles.size();
+  // Every brick's vertices by edge key, each key's keeper first (one with a crease normal, else
+  // the lowest brick): 16-byte references sort faster than the vertices, and (key, rank) is
+  // unique, so any sort gives the same order.
+  struct Ref {
+    std::uint64_t key;
+    std::uint32_t rank;  // bit 31: no normal; below: the brick
+    std::uint32_t slot;  // offset[brick] + the vertex's index in its brick
+  };
+  std::vector<std::size_t> offset(outputs.size() + 1, 0), tri_offset(outputs.size() + 1, 0);
+  for (std::size_t b = 0; b < outputs.size(); ++b) {
+    offset[b + 1] = offset[b] + outputs[b].vertices.size();
+    tri_offset[b + 1] = tri_offset[b] + outputs[b].triangles.size();
   }
-  std::sort(all.begin(), all.end(), [](const EdgeVertex& x, const EdgeVertex& y) {
-    const bool nx = x.normal != glm::vec3(0.0f), ny = y.normal != glm::vec3(0.0f);
-    return x.key != y.key ? x.key < y.key : nx != ny ? nx : x.brick < y.brick;
+  std::vector<Ref> refs(offset.back());
+  tbb::parallel_for(std::size_t(0), outputs.size(), [&](std::size_t b) {
+    for (std::size_t v = 0; v < outputs[b].vertices.size(); ++v) {
+      const EdgeVertex& e = outputs[b].vertices[v];
+      const std::uint32_t plain = e.normal == glm::vec3(0.0f) ? 1u << 31 : 0u;
+      refs[offset[b] + v] = {e.key, plain | e.brick, static_cast<std::uint32_t>(offset[b] + v)};
+    }
   });
-  all.erase(std::unique(all.begin(), all.end(), [](const EdgeVertex& x, const EdgeVertex& y) { return x.key == y.key; }),
-            all.end());
+  tbb::parallel_sort(refs.begin(), refs.end(),
+                     [](const Ref& x, const Ref& y) { return x.key != y.key ? x.key < y.key : x.rank < y.rank; });
+  // The keeper of each key becomes a mesh vertex; every copy of the key maps to it.
+  std::vector<std::uint32_t> id(refs.size());
+  std::vector<EdgeVertex> all;
+  for (std::size_t i = 0; i < refs.size(); ++i) {
+    if (i == 0 || refs[i].key != refs[i - 1].key) {
+      const std::size_t b =
+          std::size_t(std::upper_bound(offset.begin(), offset.end(), std::size_t(refs[i].slot)) - offset.begin()) - 1;
+      all.push_back(outputs[b].vertices[refs[i].slot - offset[b]]);
+    }
+    id[refs[i].slot] = static_cast<std::uint32_t>(all.size() - 1);
+  }
   mesh.positions.resize(all.size());
   for (std::size_t i = 0; i < all.size(); ++i) mesh.positions[i] = all[i].position;
-  mesh.triangles.reserve(tri_count);
-  auto id = [&](std::uint64_t key) {
-    const auto it = std::lower_bound(all.begin(), all.end(), key, [](const EdgeVertex& e, std::uint64_t k) { return e.key < k; });
-    return static_cast<std::uint32_t>(it - all.begin());
-  };
-  for (const BrickOutput& o : outputs)
-    for (const auto& tri : o.triangles) mesh.triangles.push_back({id(tri[0]), id(tri[1]), id(tri[2])});
+  // A triangle's keys are its own brick's vertices, which that brick holds sorted by key.
+  mesh.triangles.resize(tri_offset.back());
+  tbb::parallel_for(std::size_t(0), outputs.size(), [&](std::size_t b) {
+    const auto& vs = outputs[b].vertices;
+    auto local = [&](std::uint64_t key) {
+      const auto it = std::lower_bound(vs.begin(), vs.end(), key, [](const EdgeVertex& e, std::uint64_t k) { return e.key < k; });
+      return id[offset[b] + std::size_t(it - vs.begin())];
+    };
+    for (std::size_t t = 0; t < outputs[b].triangles.size(); ++t) {
+      const auto& tri = outputs[b].triangles[t];
+      mesh.triangles[tri_offset[b] + t] = {local(tri[0]), local(tri[1]), local(tri[2])};
+    }
+  });
   return all;
 }
 
