@@ -820,18 +820,32 @@ double triangle_estimate(NodeKind kind, const double* s, double r, double h) {
 
 bool has_sweep_mesh(NodeKind kind) { return kind_family(kind) == Family::Primitive; }
 
-TriangleMesh sweep_mesh(const Graph& graph, NodeId node, double threshold, double precision) {
+namespace {
+
+// The checks both entry points make; r0 of the primitive, 0 when it is not visible alone.
+double checked_r0(const Graph& graph, NodeId node, double threshold, double precision) {
   if (node >= graph.size()) throw std::invalid_argument("sweep_mesh: node " + std::to_string(node) + " is not in the graph");
-  const NodeKind kind = graph.kind[node];
-  if (!has_sweep_mesh(kind))
+  if (!has_sweep_mesh(graph.kind[node]))
     throw std::invalid_argument("sweep_mesh: " + graph.label(node) + " is not a skeletal primitive");
   if (!(std::isfinite(precision) && precision > 0.0))
     throw std::invalid_argument("sweep_mesh: precision must be a finite number > 0");
   if (!(std::isfinite(threshold) && threshold > 0.0))
     throw std::invalid_argument("sweep_mesh: threshold must be a finite number > 0");
-
   const auto params = graph.params_of(node);
   const double r = primitive_r0(params[kPrimR], params[kPrimF], threshold);
+  return r > 0.0 ? r : 0.0;
+}
+
+}  // namespace
+
+double sweep_triangle_estimate(const Graph& graph, NodeId node, double threshold, double precision) {
+  const double r = checked_r0(graph, node, threshold, precision);
+  return r > 0.0 ? triangle_estimate(graph.kind[node], graph.skeleton_of(node), r, precision) : 0.0;
+}
+
+TriangleMesh sweep_mesh(const Graph& graph, NodeId node, double threshold, double precision) {
+  const double r = checked_r0(graph, node, threshold, precision);
+  const NodeKind kind = graph.kind[node];
   TriangleMesh mesh;
   if (!(r > 0.0)) return mesh;
   const double* s = graph.skeleton_of(node);

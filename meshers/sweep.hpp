@@ -92,6 +92,11 @@ inline constexpr double kSweepMaxTriangles = 50e6;
 /// kSweepMaxTriangles triangles.
 TriangleMesh sweep_mesh(const Graph& graph, NodeId node, double threshold, double precision);
 
+/// sweep_mesh's upper estimate of its triangle count (0 when F <= T), without building
+/// anything: what memory budgets take before the mesh is built. Same exceptions as sweep_mesh
+/// for a node or numbers it refuses, none for the count.
+double sweep_triangle_estimate(const Graph& graph, NodeId node, double threshold, double precision);
+
 /// True for the kinds sweep_mesh handles: the nine skeletal primitives.
 bool has_sweep_mesh(NodeKind kind);
 

@@ -194,6 +194,19 @@ TEST(MeshPlan, EveryStageTakesFromOneMemoryBudget) {
       << grid;
   EXPECT_NE(grid.find("already held by this run"), std::string::npos) << grid;  // the leaf, at least
   EXPECT_EQ(fails_at(with_quality, true), "no error");
+  // A sweep mesh takes its estimate before it is built.
+  Builder b2(kT);
+  const Tree ball = b2.build(b2.point({0, 0, 0}, {1.0}));
+  MeshOptions o = at(0.001);
+  MemoryBudget small(std::size_t(1) << 20);
+  o.polygonize.budget = &small;
+  try {
+    mesh_tree(ball, o);
+    ADD_FAILURE() << "a sphere of 10^7 triangles fitted in 1 MiB";
+  } catch (const MemoryBudgetError& e) {
+    EXPECT_NE(std::string(e.what()).find("the sweep mesh of node"), std::string::npos) << e.what();
+    EXPECT_EQ(small.in_use(), 0u);
+  }
 }
 
 TEST(MeshPlan, MemoryBudgetCountsAndRefuses) {
