@@ -43,10 +43,12 @@ TriMesh::Point om(const glm::dvec3& p) { return {p.x, p.y, p.z}; }
 // The cosine of the smallest corner angle of triangle abc: the angle opposite the shortest edge.
 // Cosines order angles the other way round (1 for a degenerate triangle), without atan2 or acos.
 double thinness(const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c) {
-  double l[3] = {glm::dot(b - c, b - c), glm::dot(c - a, c - a), glm::dot(a - b, a - b)};
-  std::sort(l, l + 3);
-  const double den = 2.0 * std::sqrt(l[1] * l[2]);
-  return den > 0 ? (l[1] + l[2] - l[0]) / den : 1.0;
+  // The smallest angle faces the shortest side: law of cosines with the other two.
+  const double x = glm::dot(b - c, b - c), y = glm::dot(c - a, c - a), z = glm::dot(a - b, a - b);
+  const double shortest = std::min({x, y, z}), longest = std::max({x, y, z});
+  const double middle = std::max(std::min(x, y), std::min(std::max(x, y), z));
+  const double den = 2.0 * std::sqrt(middle * longest);
+  return den > 0 ? (middle + longest - shortest) / den : 1.0;
 }
 
 glm::dvec3 unit_normal(const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c) {
