@@ -3,7 +3,6 @@
 #include "nodes/mesh_leaf.hpp"
 #include "runtime/tape_ops.hpp"
 
-#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -22,18 +21,23 @@ namespace ht {
 using tape_ops::Dual;
 using tape_ops::V3;
 
-struct TapeEvaluator::Workspace {
+namespace {
+
+// One workspace per thread, shared by every evaluator: a block's evaluation runs start to end
+// on its thread without yielding to another task (no instruction spawns work or evaluates
+// another tape), so nothing else touches the thread's workspace meanwhile, and making an
+// evaluator allocates nothing.
+struct Workspace {
   std::vector<float> rows;  // the register file: [register][lane]
   std::vector<Dual> dual_rows;
   std::vector<float> mesh_distance = std::vector<float>(kBlock);
   std::vector<std::uint8_t> mesh_inside = std::vector<std::uint8_t>(kBlock);
 };
 
-struct TapeEvaluator::Impl {
-  tbb::enumerable_thread_specific<TapeEvaluator::Workspace> workspaces;
-};
-
-namespace {
+Workspace& thread_workspace() {
+  thread_local Workspace ws;
+  return ws;
+}
 
 #define HT_LANE [[gnu::always_inline]] inline
 
@@ -514,19 +518,13 @@ void force_tape_isa(TapeIsa isa) {
   g_isa.store(static_cast<int>(isa), std::memory_order_release);
 }
 
-TapeEvaluator::TapeEvaluator(std::shared_ptr<const Tape> tape)
-    : tape_(std::move(tape)), impl_(std::make_unique<Impl>()) {}
+TapeEvaluator::TapeEvaluator(std::shared_ptr<const Tape> tape) : tape_(std::move(tape)) {}
 TapeEvaluator::~TapeEvaluator() = default;
 
-TapeEvaluator::Workspace& TapeEvaluator::workspace() const {
-  Workspace& ws = impl_->workspaces.local();
+void TapeEvaluator::field_block(const float* x, const float* y, const float* z, int n, float* values) const {
+  Workspace& ws = thread_workspace();
   const std::size_t rows = std::size_t(tape_->registers) * kBlock;
   if (ws.rows.size() < rows) ws.rows.resize(rows);
-  return ws;
-}
-
-void TapeEvaluator::field_block(const float* x, const float* y, const float* z, int n, float* values) const {
-  Workspace& ws = workspace();
   const Block<float> b{ws.rows.data(), ws.mesh_distance.data(), ws.mesh_inside.data(), n};
   std::copy(x, x + n, b.axis(0, 0));
   std::copy(y, y + n, b.axis(0, 1));
@@ -576,7 +574,7 @@ void TapeEvaluator::gradient(std::span<const glm::dvec3> points, std::span<doubl
   if (gradients.size() != points.size() || (!values.empty() && values.size() != points.size()))
     throw std::invalid_argument("TapeEvaluator::gradient: output sizes differ from points.size()");
   for_blocks(points.size(), [&](std::size_t block) {
-    Workspace& ws = workspace();
+    Workspace& ws = thread_workspace();
     const std::size_t rows = std::size_t(tape_->registers) * kBlock;
     if (ws.dual_rows.size() < rows) ws.dual_rows.resize(rows);
     const std::size_t at = block * kBlock;

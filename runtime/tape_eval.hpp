@@ -4,8 +4,9 @@
 // baseline x86-64, chosen at run time; see TapeIsa); gradients come from forward-mode differentiation of the same lane
 // code (runtime/tape_ops.hpp).
 //
-// Thread-safe: one evaluator may serve many threads. Each thread keeps its own workspace inside
-// the evaluator, so steady-state calls allocate nothing. Results do not depend on the number of
+// Thread-safe: one evaluator may serve many threads. Each thread keeps one workspace (the
+// register file of a block) for every evaluator, grown to the largest tape it has run, so making
+// an evaluator and steady-state calls allocate nothing. Results do not depend on the number of
 // threads (every point is computed the same way whatever block it lands in).
 #pragma once
 
@@ -63,11 +64,7 @@ class TapeEvaluator {
   void field_block(const float* x, const float* y, const float* z, int n, float* values) const;
 
  private:
-  struct Workspace;
-  Workspace& workspace() const;
   std::shared_ptr<const Tape> tape_;
-  struct Impl;
-  std::unique_ptr<Impl> impl_;
 };
 
 }  // namespace ht
