@@ -468,3 +468,42 @@ TEST(Cli, EvalRefusesMalformedNpyNamingTheFileAndWritesNothing) {
   EXPECT_EQ(files, cases.size() + 3);  // the cases, ball.json, good.npy, out.npy
   std::filesystem::remove_all(dir);
 }
+
+namespace {
+// Width and height from a PNG's IHDR chunk, or {0, 0} when the file is not a PNG.
+std::pair<std::uint32_t, std::uint32_t> png_size(const std::filesystem::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  std::string head(24, '\0');
+  in.read(head.data(), 24);
+  if (!in || head.compare(0, 8, "\x89PNG\r\n\x1a\n") != 0 || head.compare(12, 4, "IHDR") != 0) return {0, 0};
+  auto be32 = [&](std::size_t at) {
+    std::uint32_t v = 0;
+    for (std::size_t i = 0; i < 4; ++i) v = v << 8 | static_cast<unsigned char>(head[at + i]);
+    return v;
+  };
+  return {be32(16), be32(20)};
+}
+}  // namespace
+
+TEST(Cli, RenderDrawsScenesAndMeshesIntoPngs) {
+  const auto dir = test::temp_dir("cli-render");
+  const std::string s = write_scene(dir, "s.json", kBall);
+  const auto scene = test::run_cli("render " + s + " -o " + (dir / "s.png").string() + " --size 120 90 --view 10 40");
+  ASSERT_EQ(scene.code, 0) << scene.err;
+  EXPECT_EQ(png_size(dir / "s.png"), std::make_pair(120u, 90u));
+  EXPECT_NE(scene.out.find("(0 on mesh leaves"), std::string::npos) << scene.out;
+  const auto mesh = test::run_cli("render " + test::cgal_mesh("eight.off").string() + " -o " + (dir / "m.png").string() +
+                                  " --size 64 48");
+  ASSERT_EQ(mesh.code, 0) << mesh.err;
+  EXPECT_EQ(png_size(dir / "m.png"), std::make_pair(64u, 48u));
+  // Bad requests: exit 2 with the reason, and no picture.
+  const auto ext = test::run_cli("render " + s + " -o " + (dir / "x.jpg").string());
+  EXPECT_EQ(ext.code, 2);
+  EXPECT_NE(ext.err.find("PNG"), std::string::npos) << ext.err;
+  const auto size = test::run_cli("render " + s + " -o " + (dir / "y.png").string() + " --size 4 100000");
+  EXPECT_EQ(size.code, 2);
+  EXPECT_NE(size.err.find("16 to 8192"), std::string::npos) << size.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "x.jpg"));
+  EXPECT_FALSE(std::filesystem::exists(dir / "y.png"));
+  std::filesystem::remove_all(dir);
+}

@@ -2,6 +2,7 @@
 // .npy, rows of numbers as text, and files written whole or not at all.
 #pragma once
 
+#include "runtime/tree.hpp"
 #include "tools/npy.hpp"
 
 #include <glm/vec3.hpp>
@@ -33,6 +34,10 @@ npy::Points read_points(const std::string& file);
 /// Rows of `columns` numbers, space-separated, one row per line, 9 significant digits (which
 /// give back a float exactly). table.size() is a multiple of columns.
 std::string format_rows(std::span<const double> table, std::size_t columns);
+
+/// The precision a scene asks for: `requested` when > 0, else the scene's mesher.precision, else
+/// 1/100 of its solid's size (1 for an unbounded or empty solid).
+double default_precision(const Tree& tree, double requested);
 
 /// Writes `bytes` to a temporary file beside `file`, then renames it into place, so a failure
 /// never leaves a half-written `file` (nor the temporary). Throws InputError naming `file` and

@@ -17,6 +17,7 @@
 #include "runtime/tree_eval.hpp"
 #include "tools/cli_io.hpp"
 #include "tools/npy.hpp"
+#include "tools/render_cli.hpp"
 #include "tools/scenes.hpp"
 
 #include <CLI/CLI.hpp>
@@ -38,15 +39,6 @@
 namespace {
 
 using ht::cli::InputError;
-
-// The precision a scene asks for: --precision, else the scene's mesher.precision, else 1/100 of
-// its solid's size (1 for an empty solid).
-double default_precision(const ht::Tree& tree, double requested) {
-  if (requested > 0) return requested;
-  if (tree.mesher_settings().precision > 0) return tree.mesher_settings().precision;
-  const ht::Aabb solid = ht::solid_bounds(tree.graph(), tree.root(), tree.threshold());
-  return solid.finite() ? std::max(glm::length(solid.size()) / 100.0, 1e-9) : 1.0;
-}
 
 // Ffd nodes need their deformed meshes before their field exists.
 ht::Tree ready(const ht::Tree& tree, double precision, const std::string& scene) {
@@ -161,7 +153,7 @@ std::vector<double> evaluate(const ht::Tree& tree, const EvalArgs& a, std::span<
 
 int cmd_eval(const EvalArgs& a) {
   const ht::Tree loaded = ht::load_scene(a.scene);
-  const ht::Tree tree = ready(loaded, default_precision(loaded, 0.0), a.scene);
+  const ht::Tree tree = ready(loaded, ht::cli::default_precision(loaded, 0.0), a.scene);
   if (a.engine == "tape") {
     try {
       tree.evaluator();
@@ -290,7 +282,7 @@ int cmd_mesh(const MeshArgs& a) {
   using clock = std::chrono::steady_clock;
   const auto t0 = clock::now();
   const ht::Tree loaded = ht::load_scene(a.scene);
-  const double h = default_precision(loaded, a.precision);
+  const double h = ht::cli::default_precision(loaded, a.precision);
   const ht::Tree& tree = loaded;
   const double load_s = std::chrono::duration<double>(clock::now() - t0).count();
   ht::MeshOptions options;
@@ -407,6 +399,14 @@ int cmd_mesh(const MeshArgs& a) {
   return 0;
 }
 
+// An option of two numbers into a and b.
+template <class A, class B>
+void add_pair(CLI::App* app, const std::string& name, A& a, B& b, const std::string& what, const std::string& type) {
+  app->add_option(name, [&a, &b](const CLI::results_t& r) { return CLI::detail::lexical_cast(r.at(0), a) && CLI::detail::lexical_cast(r.at(1), b); }, what)
+      ->expected(2)
+      ->type_name(type);
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -452,6 +452,16 @@ int main(int argc, char** argv) {
                        "(default); off: keep the extracted triangles")
       ->check(CLI::IsMember({"on", "off"}));
 
+  ht::cli::RenderArgs render_args;
+  auto* render = app.add_subcommand("render", "Draw a scene (meshed at its precision) or a closed mesh file into a PNG");
+  render->add_option("input", render_args.input, "Scene file (.json) or mesh file (.ply, .obj, .off, .stl)")->required();
+  render->add_option("-o,--output", render_args.out, "Output picture (.png)")->required();
+  add_pair(render, "--size", render_args.width, render_args.height, "Width and height in pixels (default 800 600)", "W H");
+  add_pair(render, "--view", render_args.azimuth, render_args.elevation,
+           "Azimuth around +y and elevation, degrees (default 35 25)", "AZ EL");
+  render->add_option("--precision", render_args.precision, "Meshing precision for a scene (default: the scene's)")
+      ->check(CLI::PositiveNumber);
+
   int count = 250;
   std::uint64_t seed = 1;
   std::string generator;
@@ -482,6 +492,7 @@ int main(int argc, char** argv) {
                                                       static_cast<std::size_t>(mesh_args.threads));
       return cmd_mesh(mesh_args);
     }
+    if (*render) return ht::cli::cmd_render(render_args);
     if (*generate) {
       const std::string text = ht::scenes::snake_json(count, seed);
       std::fwrite(text.data(), 1, text.size(), stdout);
