@@ -51,13 +51,16 @@ HT_LANE Dual atan2_(Dual y, Dual x) {
   return {std::atan2(y.v, x.v), (x.v * y.dx - y.v * x.dx) * k, (x.v * y.dy - y.v * x.dy) * k,
           (x.v * y.dz - y.v * x.dz) * k};
 }
+// std::max and std::min: on a tie or a NaN in b, a. Written with the other operand first, the
+// float forms are exactly x86's maxps and minps, so they compile to one instruction, not a
+// compare and a blend.
 template <class T>
 HT_LANE T max_(const T& a, const T& b) {
-  return val(a) >= val(b) ? a : b;
+  return val(a) < val(b) ? b : a;
 }
 template <class T>
 HT_LANE T min_(const T& a, const T& b) {
-  return val(a) <= val(b) ? a : b;
+  return val(b) < val(a) ? b : a;
 }
 template <class T>
 HT_LANE T clamp_(const T& x, float lo, float hi) {
@@ -72,8 +75,8 @@ HT_LANE T abs_(const T& x) {
 // x86) keeps one, so GCC vectorizes the loops on every target, AVX2 and SSE included, whose
 // lack of masked arithmetic made it keep a computing arm behind a branch. NaN keeps the
 // templates' choice (a comparison with NaN is false).
-HT_LANE float max_(float a, float b) { return a >= b ? a : b; }
-HT_LANE float min_(float a, float b) { return a <= b ? a : b; }
+HT_LANE float max_(float a, float b) { return a < b ? b : a; }
+HT_LANE float min_(float a, float b) { return b < a ? b : a; }
 HT_LANE float clamp_(float x, float lo, float hi) {
   const float above = x < lo ? lo : x;
   return above > hi ? hi : above;
