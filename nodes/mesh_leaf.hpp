@@ -67,6 +67,12 @@ class MeshLeaf {
     double distance;  ///< dM(p), or +infinity when no triangle lies within the radius
     bool inside;      ///< p is inside the solid (exact for any p, whatever the radius)
     glm::dvec3 point{0.0};  ///< the nearest point on the mesh, when distance is finite
+    /// When distance is finite: the unit outward angle-weighted pseudo-normal of the feature
+    /// (face, edge or vertex) the nearest point lies on (Baerentzen & Aanaes 2005); within
+    /// surface_band() of the mesh, of the feature it lies on within the band (a vertex before
+    /// an edge before a face). Never zero (a degenerate feature falls back to a neighbouring
+    /// face's normal).
+    glm::dvec3 normal{0.0};
   };
   /// Distance to the nearest triangle if it is closer than `radius`, and the inside test.
   Closest query(const glm::dvec3& p, double radius) const;
@@ -82,6 +88,12 @@ class MeshLeaf {
   /// The mesh itself, shared: what a mesh leaf answers when asked for its mesh (never copied).
   std::shared_ptr<const TriangleMesh> surface() const { return surface_; }
   const Aabb& bounds() const { return bounds_; }
+  /// Points nearer to the mesh than this (world units) count as on it for gradients: there the
+  /// gradient follows Closest::normal, the one-sided limit from outside, instead of the
+  /// direction from the nearest point, which float rounding makes meaningless so close.
+  /// kSurfaceBand times the largest coordinate magnitude of the mesh.
+  double surface_band() const { return surface_band_; }
+  static constexpr double kSurfaceBand = 1e-5;
   const MeshReport& report() const { return report_; }
   const std::string& name() const { return name_; }
   /// Bytes held: vertex and index arrays, pseudo-normals and the Embree BVH estimate.
@@ -99,6 +111,7 @@ class MeshLeaf {
   std::string name_;
   std::shared_ptr<TriangleMesh> surface_ = std::make_shared<TriangleMesh>();
   Aabb bounds_;
+  double surface_band_ = 0;
   MeshReport report_;
   std::unique_ptr<Accel> accel_;
   mutable std::once_flag openmesh_once_;
@@ -116,6 +129,23 @@ MeshFieldParams mesh_field_params(double R, double F, double T);
 
 /// f(p) exactly as SCENE_FORMAT.md defines it for a mesh leaf.
 double mesh_field(const MeshLeaf& mesh, const MeshFieldParams& params, const glm::dvec3& p);
+
+/// The gradient of the pseudo-distance d(p) (SCENE_FORMAT.md) from a query's answer at p:
+/// (p - nearest) / dM outside, its opposite inside, and within `band` of the mesh
+/// (MeshLeaf::surface_band()) the unit outward pseudo-normal of the nearest feature, the
+/// one-sided limit from outside (exactly on the mesh d = r0 and the outside formula holds).
+/// Unit length wherever dM is finite; zero when it is not (d constant there).
+glm::dvec3 pseudo_distance_gradient(const MeshLeaf::Closest& c, const glm::dvec3& p, double band);
+
+struct MeshFieldSample {
+  double value = 0;
+  glm::dvec3 gradient{0.0};
+};
+/// f(p) and its exact gradient: f'(d) times pseudo_distance_gradient(). On the mesh the gradient
+/// is the one-sided limit from outside: f'(r0) times the outward pseudo-normal, so along the
+/// inward pseudo-normal for F > 0 (outward for a carving F < 0), of magnitude
+/// |f'(r0)| = 6 |F| r0 / R'^2 (1 - r0^2/R'^2)^2, never zero. Thread-safe.
+MeshFieldSample mesh_field_gradient(const MeshLeaf& mesh, const MeshFieldParams& params, const glm::dvec3& p);
 
 /// Loads each file once, however many nodes name it. Keyed by canonical path and repair flag.
 class MeshCache {
