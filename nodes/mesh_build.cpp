@@ -4,11 +4,15 @@
 // angle-weighted pseudo-normals. The contract is in nodes/mesh_leaf.hpp.
 #include "nodes/mesh_internal.hpp"
 #include "nodes/trimesh.hpp"  // ~MeshLeaf in shared_ptr's deleter
+#include "nodes/winding.hpp"
+#include "meshers/self_intersections.hpp"
+#include "meshers/union_find.hpp"
 
 #include <glm/geometric.hpp>
 
 #include <algorithm>
 #include <numeric>
+#include <tuple>
 #include <unordered_map>
 #include <utility>
 
@@ -69,9 +73,10 @@ bool opposes(const glm::uvec3& g, std::uint32_t a, std::uint32_t b) {
 }
 
 // Breadth-first over edge adjacency; each shell keeps the orientation of its lowest-numbered
-// triangle and every other triangle is made to agree with the neighbour that reached it.
+// triangle and every other triangle is made to agree with the neighbour that reached it. Not
+// `strict` (winding leaves), a non-orientable shell is left as the walk made it.
 Shells orient_shells(const std::string& name, std::vector<glm::uvec3>& tris, Topology& topo,
-                     std::vector<std::uint8_t>& flipped) {
+                     std::vector<std::uint8_t>& flipped, bool strict = true) {
   Shells shells;
   shells.of.assign(tris.size(), kNone);
   std::vector<std::uint32_t> queue;
@@ -93,7 +98,7 @@ Shells orient_shells(const std::string& name, std::vector<glm::uvec3>& tris, Top
           }
           shells.of[g] = s;
           queue.push_back(g);
-        } else if (!opposes(tris[g], a, b)) {
+        } else if (strict && !opposes(tris[g], a, b)) {
           fail(name, "the faces cannot be oriented consistently (a non-orientable surface; edge " +
                          edge_text(a, b) + ")");
         }
@@ -182,7 +187,7 @@ void fill_holes(const std::string& name, std::vector<glm::dvec3>& pos, std::vect
 
 std::shared_ptr<const MeshLeaf> MeshLeaf::from_triangles(std::vector<glm::dvec3> positions,
                                                          std::vector<glm::uvec3> triangles, std::string name,
-                                                         bool repair) {
+                                                         bool repair, MeshInside inside) {
   for (std::size_t f = 0; f < triangles.size(); ++f) {
     const glm::uvec3& t = triangles[f];
     const std::string where = "face " + std::to_string(f);
@@ -194,62 +199,111 @@ std::shared_ptr<const MeshLeaf> MeshLeaf::from_triangles(std::vector<glm::dvec3>
       fail(name, where + " repeats vertex " + std::to_string(t[0] == t[1] || t[0] == t[2] ? t[0] : t[1]));
   }
   const std::size_t faces = triangles.size();
-  return build(std::move(positions), std::move(triangles), faces, std::move(name), repair);
+  return build(std::move(positions), std::move(triangles), faces, std::move(name), repair, inside);
 }
 
-std::shared_ptr<const MeshLeaf> MeshLeaf::build(std::vector<glm::dvec3> positions,
-                                                std::vector<glm::uvec3> triangles, std::size_t input_faces,
-                                                std::string name, bool repair) {
-  for (std::size_t v = 0; v < positions.size(); ++v)
-    if (!std::isfinite(positions[v].x) || !std::isfinite(positions[v].y) || !std::isfinite(positions[v].z))
-      fail(name, "vertex " + std::to_string(v) + " has a non-finite coordinate");
-  if (triangles.empty()) fail(name, "no triangles");
-  if (positions.size() >= kNone || triangles.size() >= kNone / 3)
-    fail(name, "too many vertices or triangles");
+namespace {
 
-  std::shared_ptr<MeshLeaf> leaf(new MeshLeaf());
-  MeshReport& report = leaf->report_;
-  report.input_faces = input_faces;
-  const std::size_t original = triangles.size();
-  std::vector<std::uint8_t> flipped(original, 0);
+std::string first_edge(const std::vector<glm::uvec3>& tris, std::uint32_t h) {
+  return edge_text(corner(tris[h / 3], h % 3), corner(tris[h / 3], h % 3 + 1));
+}
 
-  auto check_edges = [&](const Topology& topo, const char* after) {
-    if (topo.nonmanifold > 0) {
-      const std::uint32_t h = topo.first_nonmanifold;
-      fail(name, std::to_string(topo.nonmanifold) + " non-manifold edges" + after +
-                     " (an edge shared by more than two faces, first " +
-                     edge_text(corner(triangles[h / 3], h % 3), corner(triangles[h / 3], h % 3 + 1)) + ")");
-    }
-  };
-  Topology topo = edge_topology(triangles);
-  check_edges(topo, "");
-  if (topo.boundary > 0 && !repair) {
-    const std::uint32_t h = topo.first_boundary;
-    fail(name, std::to_string(topo.boundary) + " open boundary edges (first " +
-                   edge_text(corner(triangles[h / 3], h % 3), corner(triangles[h / 3], h % 3 + 1)) +
-                   "); closed meshes only (or \"repair\": true)");
+// Boundary loops (connected sets of boundary edges) and vertices repeating an earlier one's
+// position, for the report.
+void count_defects(const std::vector<glm::dvec3>& pos, const std::vector<glm::uvec3>& tris, const Topology& topo,
+                   MeshReport& report) {
+  report.boundary_edges = topo.boundary;
+  report.nonmanifold_edges = topo.nonmanifold;
+  UnionFind sets(pos.size());
+  std::vector<std::uint8_t> on_boundary(pos.size(), 0);
+  for (std::uint32_t h = 0; h < topo.nbr.size(); ++h) {
+    if (topo.nbr[h] != kNone) continue;
+    const std::uint32_t a = corner(tris[h / 3], h % 3), b = corner(tris[h / 3], h % 3 + 1);
+    sets.unite(a, b);
+    on_boundary[a] = on_boundary[b] = 1;
   }
-  Shells shells = orient_shells(name, triangles, topo, flipped);
+  // Non-manifold edges also have nbr kNone on every half-edge: they are not boundary loops.
+  report.holes = 0;
   if (topo.boundary > 0) {
-    fill_holes(name, positions, triangles, topo, report);
-    topo = edge_topology(triangles);
-    check_edges(topo, " after closing holes");
-    if (topo.boundary > 0)
-      fail(name, std::to_string(topo.boundary) + " open boundary edges remain after closing holes");
-    flipped.resize(triangles.size(), 0);
-    shells = orient_shells(name, triangles, topo, flipped);
+    std::vector<std::uint8_t> seen(pos.size(), 0);
+    for (std::uint32_t v = 0; v < pos.size(); ++v)
+      if (on_boundary[v] && !seen[sets.find(v)]) seen[sets.find(v)] = 1, ++report.holes;
   }
+  std::vector<std::uint32_t> order(pos.size());
+  std::iota(order.begin(), order.end(), 0u);
+  auto less = [&](std::uint32_t x, std::uint32_t y) {
+    return std::tie(pos[x].x, pos[x].y, pos[x].z, x) < std::tie(pos[y].x, pos[y].y, pos[y].z, y);
+  };
+  std::sort(order.begin(), order.end(), less);
+  report.duplicate_vertices = 0;
+  for (std::size_t i = 1; i < order.size(); ++i) report.duplicate_vertices += pos[order[i]] == pos[order[i - 1]];
+}
 
-  leaf->accel_ = std::make_unique<Accel>(name, positions, triangles, shells);
-  const Accel& accel = *leaf->accel_;
+// A closed leaf's refusals, each naming the defect (and what would accept the mesh).
+void check_closed(const std::string& name, const std::vector<glm::uvec3>& tris, const Topology& topo,
+                  const MeshReport& report, bool repair, const char* after) {
+  const std::string other = "; closed meshes only (or \"inside\": \"winding\")";
+  if (topo.nonmanifold > 0)
+    fail(name, std::to_string(topo.nonmanifold) + " non-manifold edges" + after +
+                   " (an edge shared by more than two faces, first " + first_edge(tris, topo.first_nonmanifold) + ")" +
+                   other);
+  if (topo.boundary > 0 && !repair) {
+    std::string dup;
+    if (report.duplicate_vertices > 0)
+      dup = ", and " + std::to_string(report.duplicate_vertices) + " vertices duplicate another's position";
+    fail(name, std::to_string(topo.boundary) + " open boundary edges in " + std::to_string(report.holes) +
+                   " holes (first " + first_edge(tris, topo.first_boundary) + ")" + dup +
+                   "; closed meshes only (or \"repair\": true, or \"inside\": \"winding\")");
+  }
+}
 
-  // Outward orientation. A shell nested inside an even number of others bounds material on its
-  // inside (positive volume); inside an odd number it bounds a cavity (negative volume). Nesting
-  // is counted by ray parity against the other shells from a point on the shell's largest
-  // triangle; Embree's ray tests ignore orientation, so the scene stays valid across flips.
-  Aabb box;
-  for (const glm::uvec3& t : triangles)
-    for (int k = 0; k < 3; ++k) box.grow(positions[t[k]]);
+// A winding leaf keeps each shell's majority orientation (by area): the BFS made every shell
+// agree with its first triangle; where that flipped most of the shell, the shell goes back.
+void keep_majority(std::vector<glm::uvec3>& tris, Topology& topo, const Shells& shells,
+                   const std::vector<glm::dvec3>& pos, std::vector<std::uint8_t>& flipped) {
+  std::vector<double> area(shells.count, 0.0), moved(shells.count, 0.0);
+  for (std::uint32_t t = 0; t < tris.size(); ++t) {
+    const double a = glm::length(glm::cross(pos[tris[t][1]] - pos[tris[t][0]], pos[tris[t][2]] - pos[tris[t][0]]));
+    area[shells.of[t]] += a;
+    if (flipped[t]) moved[shells.of[t]] += a;
+  }
+  for (std::uint32_t t = 0; t < tris.size(); ++t)
+    if (moved[shells.of[t]] > 0.5 * area[shells.of[t]]) {
+      flip_triangle(tris, topo, t);
+      flipped[t] ^= 1u;
+    }
+}
+
+// Closed leaves with several shells: two shells that cross make the inside test meaningless
+// (nesting by parity), so they are refused. Pairs within one shell are not looked for.
+void check_crossing_shells(const std::string& name, const std::vector<glm::dvec3>& pos,
+                           const std::vector<glm::uvec3>& tris, const Shells& shells, MeshReport& report) {
+  if (shells.count < 2) return;
+  TriangleMesh mesh;
+  mesh.positions = pos;
+  mesh.triangles = tris;
+  const SelfIntersections found = find_self_intersections(mesh, std::numeric_limits<std::size_t>::max());
+  std::vector<std::uint64_t> pairs;
+  for (const auto& e : found.examples) {
+    std::uint32_t s = shells.of[e[0]], g = shells.of[e[1]];
+    if (s != g) pairs.push_back((static_cast<std::uint64_t>(std::min(s, g)) << 32) | std::max(s, g));
+  }
+  std::sort(pairs.begin(), pairs.end());
+  report.intersecting_shells = static_cast<std::size_t>(std::unique(pairs.begin(), pairs.end()) - pairs.begin());
+  if (report.intersecting_shells == 0) return;
+  fail(name, std::to_string(report.intersecting_shells) + " pairs of shells cross each other (first shells " +
+                 std::to_string(pairs[0] >> 32) + " and " + std::to_string(pairs[0] & 0xffffffffu) +
+                 "): interpenetrating parts; closed meshes only (or \"inside\": \"winding\")");
+}
+
+// Outward orientation. A shell nested inside an even number of others bounds material on its
+// inside (positive volume); inside an odd number it bounds a cavity (negative volume). Nesting
+// is counted by ray parity against the other shells from a point on the shell's largest
+// triangle; Embree's ray tests ignore orientation, so the scene stays valid across flips.
+template <class Accel>  // MeshLeaf::Accel, deduced (it is private to MeshLeaf)
+void orient_outward(const Accel& accel, const std::vector<glm::dvec3>& positions,
+                    std::vector<glm::uvec3>& triangles, const Shells& shells, Topology& topo,
+                    std::vector<std::uint8_t>& flipped, const Aabb& box) {
   const glm::dvec3 o = box.center();
   std::vector<double> volume(shells.count, 0.0), largest(shells.count, -1.0);
   std::vector<glm::dvec3> probe(shells.count);
@@ -298,6 +352,50 @@ std::shared_ptr<const MeshLeaf> MeshLeaf::build(std::vector<glm::dvec3> position
       flipped[t] ^= 1u;
     }
   }
+}
+
+}  // namespace
+
+std::shared_ptr<const MeshLeaf> MeshLeaf::build(std::vector<glm::dvec3> positions,
+                                                std::vector<glm::uvec3> triangles, std::size_t input_faces,
+                                                std::string name, bool repair, MeshInside inside) {
+  for (std::size_t v = 0; v < positions.size(); ++v)
+    if (!std::isfinite(positions[v].x) || !std::isfinite(positions[v].y) || !std::isfinite(positions[v].z))
+      fail(name, "vertex " + std::to_string(v) + " has a non-finite coordinate");
+  if (triangles.empty()) fail(name, "no triangles");
+  if (positions.size() >= kNone || triangles.size() >= kNone / 3)
+    fail(name, "too many vertices or triangles");
+  const bool winding = inside == MeshInside::Winding;
+  if (winding && repair) fail(name, "\"repair\" and \"inside\": \"winding\" do not combine (winding takes holes as they are)");
+
+  std::shared_ptr<MeshLeaf> leaf(new MeshLeaf());
+  MeshReport& report = leaf->report_;
+  report.input_faces = input_faces;
+  report.inside = inside;
+  const std::size_t original = triangles.size();
+  std::vector<std::uint8_t> flipped(original, 0);
+
+  Topology topo = edge_topology(triangles);
+  count_defects(positions, triangles, topo, report);
+  if (!winding) check_closed(name, triangles, topo, report, repair, "");
+  Shells shells = orient_shells(name, triangles, topo, flipped, !winding);
+  if (winding) keep_majority(triangles, topo, shells, positions, flipped);
+  if (!winding && topo.boundary > 0) {
+    fill_holes(name, positions, triangles, topo, report);
+    topo = edge_topology(triangles);
+    check_closed(name, triangles, topo, report, true, " after closing holes");
+    if (topo.boundary > 0)
+      fail(name, std::to_string(topo.boundary) + " open boundary edges remain after closing holes");
+    flipped.resize(triangles.size(), 0);
+    shells = orient_shells(name, triangles, topo, flipped);
+  }
+  if (!winding) check_crossing_shells(name, positions, triangles, shells, report);
+
+  leaf->accel_ = std::make_unique<Accel>(name, positions, triangles, shells);
+  Aabb box;
+  for (const glm::uvec3& t : triangles)
+    for (int k = 0; k < 3; ++k) box.grow(positions[t[k]]);
+  if (!winding) orient_outward(*leaf->accel_, positions, triangles, shells, topo, flipped, box);
 
   // The report speaks of the input's faces only; triangles added by repair follow their shell.
   std::size_t changed = 0;
@@ -309,8 +407,9 @@ std::shared_ptr<const MeshLeaf> MeshLeaf::build(std::vector<glm::dvec3> position
   report.triangles = triangles.size();
 
   leaf->accel_->compute_normals(positions, triangles, std::move(topo.nbr));
+  if (winding) leaf->winding_ = std::make_unique<WindingTree>(positions, triangles);
   leaf->bounds_ = box;
-  leaf->surface_band_ = MeshLeaf::kSurfaceBand * std::max(accel.scale, std::numeric_limits<double>::min());
+  leaf->surface_band_ = MeshLeaf::kSurfaceBand * std::max(leaf->accel_->scale, std::numeric_limits<double>::min());
   leaf->name_ = std::move(name);
   leaf->surface_->positions = std::move(positions);
   leaf->surface_->triangles = std::move(triangles);

@@ -3,6 +3,7 @@
 // the field in SCENE_FORMAT.md. Reading is in nodes/mesh_read.cpp, validation in nodes/mesh_build.cpp.
 #include "nodes/mesh_internal.hpp"
 #include "nodes/trimesh.hpp"
+#include "nodes/winding.hpp"
 
 #include <glm/geometric.hpp>
 
@@ -282,7 +283,7 @@ MeshLeaf::Closest MeshLeaf::query(const glm::dvec3& p, double radius) const {
   const auto& tris = surface_->triangles;
   const bool parity = accel_->needs_parity(st.tri, st.feature, st.closest, pos, tris);
   const glm::dvec3 normal = accel_->pseudo_normal(st.tri, st.feature, tris);
-  const bool in = dist > 0 && (parity ? inside(p) : glm::dot(p - st.closest, normal) < 0);
+  const bool in = dist > 0 && (winding_ ? inside(p) : parity ? inside(p) : glm::dot(p - st.closest, normal) < 0);
   // On the surface (within the band) rounding decides which feature the nearest point is
   // reported on; the normal is that of the feature it lies on within the band.
   const int snapped = dist <= surface_band_ ? snap_feature(st.closest, pos, tris[st.tri], st.feature, surface_band_) : st.feature;
@@ -294,6 +295,7 @@ MeshLeaf::Closest MeshLeaf::query(const glm::dvec3& p, double radius) const {
 
 bool MeshLeaf::inside(const glm::dvec3& p) const {
   if (!bounds_.contains(p)) return false;
+  if (winding_) return winding_->inside(p);
   int odd_rays = 0;
   for (const auto& dir : kRayDirs) {
     std::size_t hits = 0;
@@ -313,9 +315,16 @@ void MeshLeaf::query_batch(const float* xs, const float* ys, const float* zs, st
   }
 }
 
+int MeshLeaf::box_side(const Aabb& box) const {
+  if (!winding_) return -1;
+  if (intersect(box, bounds_).empty()) return 0;
+  return winding_->box_side(box);
+}
+
 std::size_t MeshLeaf::bytes() const {
   return sizeof(MeshLeaf) + name_.capacity() + surface_->positions.capacity() * sizeof(glm::dvec3) +
-         surface_->triangles.capacity() * sizeof(glm::uvec3) + (accel_ ? accel_->bytes() : 0);
+         surface_->triangles.capacity() * sizeof(glm::uvec3) + (accel_ ? accel_->bytes() : 0) +
+         (winding_ ? winding_->bytes() : 0);
 }
 
 // ---------------------------------------------------------------------------------------------

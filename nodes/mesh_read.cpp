@@ -217,7 +217,7 @@ std::string plain_off(std::string text) {
 
 }  // namespace
 
-std::shared_ptr<const MeshLeaf> MeshLeaf::load(const std::filesystem::path& file, bool repair) {
+std::shared_ptr<const MeshLeaf> MeshLeaf::load(const std::filesystem::path& file, bool repair, MeshInside inside) {
   const std::string name = file.string();
   std::string ext = file.extension().string();
   std::transform(ext.begin(), ext.end(), ext.begin(),
@@ -273,7 +273,7 @@ std::shared_ptr<const MeshLeaf> MeshLeaf::load(const std::filesystem::path& file
     }
     for (std::size_t i = 1; i + 1 < face.size(); ++i) triangles.emplace_back(face[0], face[i], face[i + 1]);
   }
-  return build(std::move(positions), std::move(triangles), importer.faces.size(), name, repair);
+  return build(std::move(positions), std::move(triangles), importer.faces.size(), name, repair, inside);
 }
 
 const TriMeshHolder& MeshLeaf::openmesh() const {
@@ -297,13 +297,13 @@ const TriMeshHolder& MeshLeaf::openmesh() const {
   return *openmesh_;
 }
 
-std::shared_ptr<const MeshLeaf> MeshCache::get(const std::filesystem::path& file, bool repair) {
+std::shared_ptr<const MeshLeaf> MeshCache::get(const std::filesystem::path& file, bool repair, MeshInside inside) {
   std::error_code ec;
   std::filesystem::path key_path = std::filesystem::weakly_canonical(std::filesystem::absolute(file), ec);
   if (ec) key_path = std::filesystem::absolute(file).lexically_normal();
-  const std::string key = key_path.string() + (repair ? "\n+repair" : "\n");
+  const std::string key = key_path.string() + (repair ? "\n+repair" : "\n") + to_string(inside);
   if (auto it = meshes_.find(key); it != meshes_.end()) return it->second;
-  auto leaf = MeshLeaf::load(file, repair);
+  auto leaf = MeshLeaf::load(file, repair, inside);
   meshes_.emplace(key, leaf);
   return leaf;
 }
