@@ -26,6 +26,7 @@ Topology edge_topology(const std::vector<glm::uvec3>& tris) {
   Topology topo;
   const std::size_t nh = 3 * tris.size();
   topo.nbr.assign(nh, kNone);
+  topo.open.assign(nh, 0);
   // Sorting (undirected edge, half-edge) pairs groups the faces of each edge without a hash
   // map, and the order within a group stays the face order, so messages are deterministic.
   std::vector<std::pair<std::uint64_t, std::uint32_t>> keyed(nh);
@@ -40,6 +41,7 @@ Topology edge_topology(const std::vector<glm::uvec3>& tris) {
     const std::uint32_t h0 = keyed[i].second;
     if (j - i == 1) {
       ++topo.boundary;
+      topo.open[h0] = 1;
       topo.first_boundary = std::min(topo.first_boundary, h0);
     } else if (j - i == 2) {
       const std::uint32_t h1 = keyed[i + 1].second;
@@ -217,12 +219,11 @@ void count_defects(const std::vector<glm::dvec3>& pos, const std::vector<glm::uv
   UnionFind sets(pos.size());
   std::vector<std::uint8_t> on_boundary(pos.size(), 0);
   for (std::uint32_t h = 0; h < topo.nbr.size(); ++h) {
-    if (topo.nbr[h] != kNone) continue;
+    if (!topo.open[h]) continue;  // nbr is kNone on non-manifold edges too: not boundary loops
     const std::uint32_t a = corner(tris[h / 3], h % 3), b = corner(tris[h / 3], h % 3 + 1);
     sets.unite(a, b);
     on_boundary[a] = on_boundary[b] = 1;
   }
-  // Non-manifold edges also have nbr kNone on every half-edge: they are not boundary loops.
   report.holes = 0;
   if (topo.boundary > 0) {
     std::vector<std::uint8_t> seen(pos.size(), 0);

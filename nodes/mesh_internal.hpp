@@ -36,6 +36,7 @@ inline std::string edge_text(std::uint32_t a, std::uint32_t b) {
 
 struct Topology {
   std::vector<std::uint32_t> nbr;
+  std::vector<std::uint8_t> open;  // 1 for half-edges of boundary edges (one face), per half-edge
   std::size_t boundary = 0, nonmanifold = 0;
   std::uint32_t first_boundary = kNone, first_nonmanifold = kNone;  // a half-edge, face order
 };
