@@ -1,7 +1,10 @@
 // Mesh-leaf field queries through the reference evaluator (double, one Embree point query per
-// point): bunny00 at points within its support radius; 1 and 2 threads (TBB arenas).
+// point): bunny00 at points within its support radius; 1 and 2 threads (TBB arenas). Winding
+// numbers (nodes/winding.hpp) on bunny00 with holes, one thread: the exact sum, the
+// hierarchical estimate, and the exact-where-it-matters inside test.
 #include "bench/bench_util.hpp"
 #include "nodes/mesh_leaf.hpp"
+#include "nodes/winding.hpp"
 #include "runtime/builder.hpp"
 
 #include <benchmark/benchmark.h>
@@ -53,5 +56,44 @@ BENCHMARK(BM_Reference_Bunny00)
     ->ArgNames({"threads", "R_permille"})
     ->Unit(benchmark::kMillisecond)
     ->UseRealTime();
+
+// Arg: 0 exact sum, 1 hierarchical estimate (tau = WindingTree::kTau), 2 inside() (certified,
+// refined near the 1/2 level set). Points uniform in the mesh's box grown by a quarter of its
+// diagonal (near 0), or within 1/200 of the diagonal of a vertex (near 1); bunny00 with every
+// 50th triangle removed (open, 1.3k holes).
+void BM_Winding_Bunny00(benchmark::State& state) {
+  static const auto leaf = MeshLeaf::load(bench::cgal_mesh("bunny00.off"));
+  static const WindingTree tree = [] {
+    std::vector<glm::uvec3> tris;
+    for (std::size_t t = 0; t < leaf->triangles().size(); ++t)
+      if (t % 50 != 0) tris.push_back(leaf->triangles()[t]);
+    return WindingTree(leaf->positions(), tris);
+  }();
+  const Aabb box = leaf->bounds().expanded(0.25 * glm::length(leaf->bounds().size()));
+  std::mt19937_64 rng(11);
+  std::uniform_real_distribution<double> u(0, 1);
+  const std::size_t count = state.range(0) == 0 ? (bench::quick_mode ? 20 : 200) : (bench::quick_mode ? 2000 : 20000);
+  std::vector<glm::dvec3> pts(count);
+  for (auto& p : pts) p = box.lo + glm::dvec3(u(rng), u(rng), u(rng)) * box.size();
+  if (state.range(1) == 1) {  // near the surface: vertices moved by up to 1/200 of the diagonal
+    const double r = 0.005 * glm::length(leaf->bounds().size());
+    for (auto& p : pts)
+      p = leaf->positions()[static_cast<std::size_t>(u(rng) * 0.999 * static_cast<double>(leaf->positions().size()))] +
+          r * (glm::dvec3(u(rng), u(rng), u(rng)) * 2.0 - 1.0);
+  }
+  for (auto _ : state) {
+    double sum = 0;
+    for (const auto& p : pts)
+      sum += state.range(0) == 0   ? tree.exact(p)
+             : state.range(0) == 1 ? tree.estimate(p, 0.0, WindingTree::kTau).w
+                                   : (tree.inside(p) ? 1.0 : 0.0);
+    benchmark::DoNotOptimize(sum);
+  }
+  state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations() * pts.size()));
+}
+BENCHMARK(BM_Winding_Bunny00)
+    ->ArgsProduct({{0, 1, 2}, {0, 1}})
+    ->ArgNames({"exact_estimate_inside", "near"})
+    ->Unit(benchmark::kMillisecond);
 
 }  // namespace

@@ -41,6 +41,7 @@ const char* to_string(JobReason r) {
     case JobReason::LowOverlap: return "low overlap";
     case JobReason::HighOverlap: return "high overlap";
     case JobReason::NoLocalMethod: return "no local method";
+    case JobReason::WindingLeaf: return "winding leaf";
     case JobReason::Fallback: return "fallback";
   }
   return "?";
@@ -123,7 +124,10 @@ class Planner {
     if (kind == NodeKind::Ffd) return set(g_.mesh[n] == kNone ? JobStrategy::DeformedChild : JobStrategy::SharedLeaf, JobReason::Kind);
     if (want == MeshStrategy::Global) return set(JobStrategy::Global, why);
     switch (kind_family(kind)) {
-      case Family::Mesh: return set(JobStrategy::SharedLeaf, why);
+      case Family::Mesh:
+        // A winding leaf's triangles may be open or cross: its solid's surface is polygonized.
+        if (g_.meshes[g_.mesh[n]]->inside_mode() == MeshInside::Winding) return set(JobStrategy::Global, JobReason::WindingLeaf);
+        return set(JobStrategy::SharedLeaf, why);
       case Family::Primitive: return set(JobStrategy::Sweep, why);
       case Family::Warp: return set(JobStrategy::WarpedChild, why);
       case Family::Operator: break;

@@ -169,14 +169,14 @@ NodeId Builder::cone_sphere(glm::dvec3 a, glm::dvec3 b, double ra, double rb, Fa
   return add_primitive(NodeKind::ConeSphere, s, f);
 }
 
-NodeId Builder::mesh(const std::filesystem::path& file, Falloff f, bool repair) {
+NodeId Builder::mesh(const std::filesystem::path& file, Falloff f, bool repair, MeshInside inside) {
   check_falloff(f);
   if (!(std::abs(f.strength) > threshold_))
     throw BuildError("strength", "|strength| must be > threshold (" + std::to_string(threshold_) + ")");
   const std::filesystem::path full = file.is_absolute() || base_dir_.empty() ? file : base_dir_ / file;
   std::shared_ptr<const MeshLeaf> leaf;
   try {
-    leaf = cache_->get(full, repair);
+    leaf = cache_->get(full, repair, inside);
   } catch (const MeshError& e) {
     throw BuildError("file", e.what());
   }

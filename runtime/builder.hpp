@@ -13,6 +13,7 @@
 // ids this builder returned. A node may be used by several parents.
 #pragma once
 
+#include "nodes/mesh_inside.hpp"
 #include "runtime/graph.hpp"
 #include "runtime/tree.hpp"
 
@@ -66,8 +67,11 @@ class Builder {
   NodeId cone_sphere(glm::dvec3 a, glm::dvec3 b, double radius_a, double radius_b, Falloff f);
 
   /// A mesh leaf from a file (loaded once per builder however often it is named), or from a
-  /// mesh already loaded. Requires |F| > T. Throws BuildError("file", ...) for unusable meshes.
-  NodeId mesh(const std::filesystem::path& file, Falloff f, bool repair = false);
+  /// mesh already loaded. Requires |F| > T. `inside` chooses how inside is decided (closed
+  /// meshes only, or the generalized winding number: nodes/mesh_leaf.hpp MeshInside). Throws
+  /// BuildError("file", ...) for unusable meshes (the message names the defect).
+  NodeId mesh(const std::filesystem::path& file, Falloff f, bool repair = false,
+              MeshInside inside = MeshInside::Closed);
   NodeId mesh(std::shared_ptr<const MeshLeaf> leaf, Falloff f);
 
   // Operators.

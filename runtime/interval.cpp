@@ -17,6 +17,7 @@ namespace ht {
 namespace {
 
 Interval hull(double a, double b) { return {std::min(a, b), std::max(a, b)}; }
+Interval hull(const Interval& a, const Interval& b) { return {std::min(a.lo, b.lo), std::max(a.hi, b.hi)}; }
 
 double box_gap(const Aabb& a, const Aabb& b) {
   const glm::dvec3 gap = glm::max(glm::max(a.lo - b.hi, b.lo - a.hi), glm::dvec3(0.0));
@@ -53,14 +54,19 @@ Interval mesh_interval(const Graph& g, NodeId n, double T, const Aabb& box) {
   const MeshLeaf& mesh = *g.meshes[g.mesh[n]];
   const double half = 0.5 * glm::length(box.size());
   const MeshLeaf::Closest c = mesh.query(box.center(), half + reach);
-  if (!std::isfinite(c.distance)) return c.inside ? Interval{F, F} : Interval{};
+  // A closed leaf's box away from the surface is all on the centre's side. A winding leaf's
+  // 1/2 level set may cross it far from any triangle (across a hole): its side is certified
+  // over the whole box (WindingTree::box_side) or both sides are allowed.
+  const int side = mesh.inside_mode() == MeshInside::Winding ? mesh.box_side(box) : (c.inside ? 1 : 0);
+  if (!std::isfinite(c.distance)) return side == 1 ? Interval{F, F} : side == 0 ? Interval{} : hull(F, 0.0);
   if (c.distance <= half) return either_sign(F);  // the surface crosses the box
-  // The whole box is on the centre's side; pseudo-distance ranges follow dM +- half.
+  // Pseudo-distance ranges follow dM +- half on each side the box may be on.
   const double dlo = c.distance - half, dhi = c.distance + half;
   auto field_at = [&](double pseudo) { return falloff(pseudo, kernel, F); };
   (void)T;
-  if (c.inside) return hull(field_at(std::max(0.0, r0 - dhi)), field_at(std::max(0.0, r0 - dlo)));
-  return hull(field_at(dlo + r0), field_at(dhi + r0));
+  const Interval in = hull(field_at(std::max(0.0, r0 - dhi)), field_at(std::max(0.0, r0 - dlo)));
+  const Interval out = hull(field_at(dlo + r0), field_at(dhi + r0));
+  return side == 1 ? in : side == 0 ? out : hull(in, out);
 }
 
 // The region of a warp's child: where the child is asked, w^-1(box).

@@ -247,7 +247,15 @@ class Loader {
     if (type == "mesh") {
       const std::string file = o.string("file");
       const Falloff f = parse_falloff(o);
-      return b_.mesh(file, f, o.boolean("repair", false));
+      const bool repair = o.boolean("repair", false);
+      MeshInside inside = MeshInside::Closed;
+      if (o.has("inside")) {
+        const std::string s = o.string("inside");
+        if (s == "winding") inside = MeshInside::Winding;
+        else if (s != "closed") throw Fail{o.at("inside"), "must be \"closed\" or \"winding\", not \"" + s + "\""};
+        if (inside == MeshInside::Winding && repair) throw Fail{o.at("repair"), "cannot be combined with \"inside\": \"winding\""};
+      }
+      return b_.mesh(file, f, repair, inside);
     }
     NodeId id;
     if (type == "blend") {

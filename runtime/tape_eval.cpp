@@ -221,7 +221,9 @@ void mesh_loop(const Tape& tape, const Block<float>& b, const Instruction& ins, 
   for (int i = m; i < n; ++i) out[i] = 0.0f;
 }
 
-// With gradients: the distance's gradient is the unit vector from the nearest point.
+// With gradients: the pseudo-distance's gradient from pseudo_distance_gradient() (the unit
+// vector from the nearest point, or on the mesh the outward pseudo-normal: the one-sided limit
+// from outside), in double as the reference evaluator computes it, then the falloff's slope.
 void mesh_loop(const Tape& tape, const Block<Dual>& b, const Instruction& ins, const float* k, int n) {
   const MeshLeaf& leaf = *tape.meshes[static_cast<std::size_t>(k[4])];
   const float F = k[0], kernel = k[1], r0 = k[2], radius = k[3];
@@ -234,18 +236,15 @@ void mesh_loop(const Tape& tape, const Block<Dual>& b, const Instruction& ins, c
     const MeshLeaf::Closest c = leaf.query(p, static_cast<double>(radius));
     const float dm = std::isfinite(c.distance) ? static_cast<float>(c.distance) : std::numeric_limits<float>::infinity();
     const float d = pseudo_distance(dm, c.inside, r0);
-    if (!(d < kernel) || d == 0.0f || !std::isfinite(dm) || dm == 0.0f) {
+    if (!(d < kernel) || d == 0.0f || !std::isfinite(dm)) {
       out[i] = Dual(mesh_value(d, F, kernel));
       continue;
     }
-    // d(dM)/dq = (q - nearest) / dM; the pseudo-distance follows dM outside, -dM inside.
-    const glm::dvec3 nrm = (p - c.point) / c.distance;
-    const float sign = c.inside ? -1.0f : 1.0f;
-    const Dual ddm = x[i] * static_cast<float>(nrm.x) + y[i] * static_cast<float>(nrm.y) +
-                     z[i] * static_cast<float>(nrm.z);
+    const glm::dvec3 g = pseudo_distance_gradient(c, p, leaf.surface_band());
+    const Dual dd = x[i] * static_cast<float>(g.x) + y[i] * static_cast<float>(g.y) + z[i] * static_cast<float>(g.z);
     const float u = 1.0f - (d * d) / (kernel * kernel);
-    const float slope = -6.0f * F * d / (kernel * kernel) * u * u * sign;
-    out[i] = chain(ddm, F * u * u * u, slope);
+    const float slope = -6.0f * F * d / (kernel * kernel) * u * u;
+    out[i] = chain(dd, F * u * u * u, slope);
   }
 }
 

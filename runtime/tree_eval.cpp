@@ -11,11 +11,17 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <exception>
 #include <mutex>
+#include <span>
 
 namespace ht {
+
+namespace {
+MeshFieldParams leaf_params(std::span<const double> prm, double T);
+}  // namespace
 
 double reference_field(const Graph& g, NodeId n, double T, const glm::dvec3& p, bool under_blend) {
   const NodeKind k = g.kind[n];
@@ -26,16 +32,7 @@ double reference_field(const Graph& g, NodeId n, double T, const glm::dvec3& p, 
     return reference_field(g, c[i], T, q, blended);
   };
   switch (k) {
-    case NodeKind::Mesh: {
-      MeshFieldParams m;
-      m.R = prm[0];
-      m.F = prm[1];
-      m.T = T;
-      m.kernel_radius = prm[2];
-      m.r0 = prm[3];
-      m.query_radius = prm[4];
-      return mesh_field(*g.meshes[g.mesh[n]], m, p);
-    }
+    case NodeKind::Mesh: return mesh_field(*g.meshes[g.mesh[n]], leaf_params(prm, T), p);
     case NodeKind::Blend: {
       double sum = 0.0;
       for (std::size_t i = 0; i < c.size(); ++i) sum += child(i, p, true);
@@ -72,17 +69,147 @@ double reference_field(const Graph& g, NodeId n, double T, const glm::dvec3& p, 
   }
 }
 
-glm::dvec3 reference_gradient(const Graph& g, NodeId n, double T, const glm::dvec3& p, bool under_blend) {
-  const double scale = std::max({1.0, std::abs(p.x), std::abs(p.y), std::abs(p.z)});
-  const double h = 1e-6 * scale;
+namespace {
+
+struct ValueGradient {
+  double v = 0;
+  glm::dvec3 g{0.0};
+};
+
+double step_at(const glm::dvec3& p) { return 1e-6 * std::max({1.0, std::abs(p.x), std::abs(p.y), std::abs(p.z)}); }
+
+// Central differences of a smooth function of space (a primitive's field, the crop box field).
+template <class Fn>
+glm::dvec3 central_gradient(const glm::dvec3& p, Fn&& f) {
+  const double h = step_at(p);
   glm::dvec3 grad;
   for (int axis = 0; axis < 3; ++axis) {
     glm::dvec3 a = p, b = p;
     a[axis] += h;
     b[axis] -= h;
-    grad[axis] = (reference_field(g, n, T, a, under_blend) - reference_field(g, n, T, b, under_blend)) / (2.0 * h);
+    grad[axis] = (f(a) - f(b)) / (2.0 * h);
   }
   return grad;
+}
+
+// The partial derivative of an operator's combination h(x[0..n)) in x[i], by central
+// differences in value space (max, min and clamps pick their branch as the tape does, away
+// from ties).
+template <class Fn, std::size_t N>
+double partial(Fn&& h, std::array<double, N> x, std::size_t i) {
+  const double e = 1e-7 * std::max(1.0, std::abs(x[i])), xi = x[i];
+  x[i] = xi + e;
+  const double up = h(x);
+  x[i] = xi - e;
+  return (up - h(x)) / (2.0 * e);
+}
+
+template <class Fn, std::size_t N>
+ValueGradient combine(Fn&& h, const std::array<ValueGradient, N>& in) {
+  std::array<double, N> x;
+  for (std::size_t i = 0; i < N; ++i) x[i] = in[i].v;
+  ValueGradient out{h(x), glm::dvec3(0.0)};
+  for (std::size_t i = 0; i < N; ++i)
+    if (in[i].g != glm::dvec3(0.0)) out.g += partial(h, x, i) * in[i].g;
+  return out;
+}
+
+MeshFieldParams leaf_params(std::span<const double> prm, double T) {
+  MeshFieldParams m;
+  m.R = prm[0];
+  m.F = prm[1];
+  m.T = T;
+  m.kernel_radius = prm[2];
+  m.r0 = prm[3];
+  m.query_radius = prm[4];
+  return m;
+}
+
+ValueGradient value_gradient(const Graph& g, NodeId n, double T, const glm::dvec3& p, bool under_blend);
+
+ValueGradient boolean_value_gradient(const Graph& g, NodeId n, double T, const glm::dvec3& p, bool under_blend) {
+  const NodeKind k = g.kind[n];
+  const auto c = g.children_of(n);
+  const bool rf = use_rfunction(g.boolean[n], under_blend);
+  auto op = [&](const std::array<double, 2>& x) {
+    return k == NodeKind::Union          ? union_field(x[0], x[1], T, rf)
+           : k == NodeKind::Intersection ? intersection_field(x[0], x[1], T, rf)
+                                         : difference_field(x[0], x[1], T, rf);
+  };
+  ValueGradient f = value_gradient(g, c[0], T, p, under_blend);
+  for (std::size_t i = 1; i < c.size(); ++i) f = combine(op, std::array{f, value_gradient(g, c[i], T, p, under_blend)});
+  return f;
+}
+
+// The chain rule through the tree in double: mesh leaves analytic (mesh_field_gradient), warps
+// by the central-difference Jacobian of w^-1, primitives by central differences, operators by
+// their partial derivatives.
+ValueGradient value_gradient(const Graph& g, NodeId n, double T, const glm::dvec3& p, bool under_blend) {
+  const NodeKind k = g.kind[n];
+  const auto prm = g.params_of(n);
+  const auto c = g.children_of(n);
+  auto child = [&](std::size_t i, const glm::dvec3& q, bool blended) { return value_gradient(g, c[i], T, q, blended); };
+  switch (k) {
+    case NodeKind::Mesh: {
+      const MeshFieldSample s = mesh_field_gradient(*g.meshes[g.mesh[n]], leaf_params(prm, T), p);
+      return {s.value, s.gradient};
+    }
+    case NodeKind::Ffd: {
+      if (g.mesh[n] == kNone) return {reference_field(g, n, T, p, under_blend), glm::dvec3(0.0)};  // throws
+      const MeshFieldSample s = mesh_field_gradient(*g.meshes[g.mesh[n]], mesh_field_params(prm[9], prm[10], T), p);
+      return {s.value, s.gradient};
+    }
+    case NodeKind::Blend: {
+      ValueGradient sum;
+      for (std::size_t i = 0; i < c.size(); ++i) {
+        const ValueGradient f = child(i, p, true);
+        sum.v += f.v;
+        sum.g += f.g;
+      }
+      return sum;
+    }
+    case NodeKind::Union:
+    case NodeKind::Intersection:
+    case NodeKind::Difference: return boolean_value_gradient(g, n, T, p, under_blend);
+    case NodeKind::LocalBlend: {
+      const bool rf = use_rfunction(g.boolean[n], under_blend);
+      auto op = [&](const std::array<double, 3>& x) { return local_blend_field(x[0], x[1], x[2], T, rf); };
+      return combine(op, std::array{child(0, p, true), child(1, p, true), child(2, p, true)});
+    }
+    case NodeKind::Crop: {
+      auto box = [&](const glm::dvec3& q) { return crop_box_field(prm.data(), T, q); };
+      const ValueGradient h{box(p), central_gradient(p, box)};
+      auto op = [](const std::array<double, 2>& x) { return std::max(0.0, std::min(x[0], x[1])); };
+      return combine(op, std::array{child(0, p, under_blend), h});
+    }
+    case NodeKind::Affine:
+    case NodeKind::Twist:
+    case NodeKind::Taper:
+    case NodeKind::Bend: {
+      const ValueGradient f = child(0, warp_inverse(k, prm.data(), p), under_blend);
+      if (f.g == glm::dvec3(0.0)) return f;
+      // grad (f o w^-1)(p) = J^T grad f, J the Jacobian of w^-1 at p (column j: d w^-1 / dp_j).
+      const double h = step_at(p);
+      glm::dvec3 grad;
+      for (int axis = 0; axis < 3; ++axis) {
+        glm::dvec3 a = p, b = p;
+        a[axis] += h;
+        b[axis] -= h;
+        grad[axis] = glm::dot((warp_inverse(k, prm.data(), a) - warp_inverse(k, prm.data(), b)) / (2.0 * h), f.g);
+      }
+      return {f.v, grad};
+    }
+    default: {  // skeletal primitives
+      auto field = [&](const glm::dvec3& q) { return falloff(skeleton_distance(k, g.skeleton_of(n), q), prm[kPrimR], prm[kPrimF]); };
+      return {field(p), central_gradient(p, field)};
+    }
+  }
+}
+
+}  // namespace
+
+glm::dvec3 reference_gradient(const Graph& g, NodeId n, double T, const glm::dvec3& p, bool under_blend) {
+  return value_gradient(g, n, T, p, under_blend).g;
 }
 
 struct Tree::Compiled {

@@ -21,8 +21,11 @@ struct EvalError : std::runtime_error {
 double reference_field(const Graph& graph, NodeId node, double threshold, const glm::dvec3& p,
                        bool under_blend = false);
 
-/// Central-difference gradient of reference_field, with a step relative to |p| so that it
-/// stays accurate far from the origin.
+/// The gradient of reference_field by the chain rule through the tree: mesh leaves exactly
+/// (mesh_field_gradient: on a mesh, the one-sided limit from outside along the inward
+/// pseudo-normal, never zero), warps through the central-difference Jacobian of w^-1,
+/// primitives and the crop box by central differences, operators by their partial derivatives
+/// in value space; steps relative to |p| so that it stays accurate far from the origin.
 glm::dvec3 reference_gradient(const Graph& graph, NodeId node, double threshold, const glm::dvec3& p,
                               bool under_blend = false);
 

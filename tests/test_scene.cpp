@@ -96,6 +96,11 @@ std::vector<BadCase> bad_cases() {
       {scene(R"({"type": "mesh", "file": "missing.off", "radius": 0.1})"), "root.file: "},
       {scene(R"({"type": "mesh", "file": "missing.off", "radius": 0.1, "strength": 0.4})"),
        "root.strength: |strength| must be > threshold"},
+      {scene(R"({"type": "mesh", "file": "missing.off", "radius": 0.1, "inside": "parity"})"),
+       "root.inside: must be \"closed\" or \"winding\", not \"parity\""},
+      {scene(R"({"type": "mesh", "file": "missing.off", "radius": 0.1, "inside": 3})"), "root.inside: must be a string"},
+      {scene(R"({"type": "mesh", "file": "missing.off", "radius": 0.1, "inside": "winding", "repair": true})"),
+       "root.repair: cannot be combined with \"inside\": \"winding\""},
   };
 }
 

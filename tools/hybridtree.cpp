@@ -69,6 +69,24 @@ std::string fmt_vec(const glm::dvec3& v) {
   return buf;
 }
 
+
+// What a mesh leaf's report counts as defects, as one line ("" for none). A closed leaf has
+// none left (it would have been refused), except what repair closed or duplicate positions.
+std::string defects_text(const ht::MeshReport& r) {
+  std::string s;
+  auto add = [&](std::size_t n, const std::string& what) {
+    if (n == 0) return;
+    s += (s.empty() ? "" : ", ") + std::to_string(n) + " " + what;
+  };
+  if (r.boundary_edges > 0)
+    add(r.boundary_edges, "boundary edges in " + std::to_string(r.holes) + (r.holes == 1 ? " hole" : " holes"));
+  add(r.nonmanifold_edges, "non-manifold edges");
+  add(r.duplicate_vertices, "duplicate vertices");
+  add(r.intersecting_shells, "crossing shell pairs");
+  if (r.inside == ht::MeshInside::Winding && r.components > 1) add(r.components, "components");
+  return s;
+}
+
 int cmd_info(const std::string& scene) {
   const auto t0 = std::chrono::steady_clock::now();
   const ht::Tree tree = ht::load_scene(scene);
@@ -98,12 +116,14 @@ int cmd_info(const std::string& scene) {
   for (const auto& m : g.meshes) {
     const ht::MeshReport& r = m->report();
     mesh_bytes += m->bytes();
-    std::printf("mesh           %s: %zu triangles, %zu vertices, %zu shell%s%s%s\n", m->name().c_str(), r.triangles,
-                r.vertices, r.components, r.components == 1 ? "" : "s",
+    std::printf("mesh           %s: %zu triangles, %zu vertices, %zu shell%s, inside %s%s%s\n", m->name().c_str(),
+                r.triangles, r.vertices, r.components, r.components == 1 ? "" : "s",
+                r.inside == ht::MeshInside::Winding ? "by winding number" : "closed",
                 r.inverted ? ", faces pointed inward (flipped: same solid)" : "",
                 r.reoriented_faces ? (", " + std::to_string(r.reoriented_faces) + " faces reoriented").c_str() : "");
     if (r.holes_closed)
       std::printf("               repaired: %zu holes closed with %zu triangles\n", r.holes_closed, r.triangles_added);
+    if (const std::string d = defects_text(r); !d.empty()) std::printf("               defects: %s\n", d.c_str());
   }
   std::printf("tree bytes     %zu (the model: kinds, parameters, children, names)\n", g.bytes());
   std::printf("derived bytes  %zu (support boxes, curve polylines)\n", g.derived_bytes());

@@ -1,0 +1,15 @@
+// How a mesh leaf decides "inside" (SCENE_FORMAT.md, the mesh leaf's "inside" key): its own
+// header, so the builder's interface can name it without the mesh leaf's.
+#pragma once
+
+#include <cstdint>
+
+namespace ht {
+
+enum class MeshInside : std::uint8_t {
+  Closed,   ///< a closed, manifold mesh is required; inside by pseudo-normals and ray parity
+  Winding,  ///< any triangles; inside where the generalized winding number exceeds 1/2
+};
+inline const char* to_string(MeshInside m) { return m == MeshInside::Closed ? "closed" : "winding"; }
+
+}  // namespace ht

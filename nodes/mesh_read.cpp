@@ -1,0 +1,311 @@
+// Mesh leaves, reading: OFF, OBJ, PLY and STL through OpenMesh, with the checks OpenMesh's
+// readers skip (non-finite numbers, faces as the file states them), the OpenMesh form of a
+// loaded mesh, and the cache that loads each file once. Validation is in nodes/mesh_build.cpp.
+#include "nodes/mesh_internal.hpp"
+#include "nodes/openmesh_io.hpp"
+#include "nodes/trimesh.hpp"
+
+#include <OpenMesh/Core/IO/MeshIO.hh>
+#include <OpenMesh/Core/IO/importer/ImporterT.hh>
+
+#include <algorithm>
+#include <cctype>
+#include <fstream>
+#include <iterator>
+#include <sstream>
+#include <string_view>
+
+namespace ht {
+
+using namespace mesh_detail;
+
+namespace {
+
+// Every use of OpenMesh's IO holds openmesh_io_mutex() (nodes/openmesh_io.hpp) and its chatter
+// is muted: our own messages say what is wrong, with the file name.
+class QuietOpenMesh {
+ public:
+  QuietOpenMesh()
+      : lock_(openmesh_io_mutex()),
+        err_(::omerr().is_enabled()),
+        log_(::omlog().is_enabled()),
+        out_(::omout().is_enabled()) {
+    ::omerr().disable();
+    ::omlog().disable();
+    ::omout().disable();
+  }
+  ~QuietOpenMesh() {
+    if (err_) ::omerr().enable();
+    if (log_) ::omlog().enable();
+    if (out_) ::omout().enable();
+  }
+  QuietOpenMesh(const QuietOpenMesh&) = delete;
+  QuietOpenMesh& operator=(const QuietOpenMesh&) = delete;
+
+ private:
+  std::lock_guard<std::mutex> lock_;
+  bool err_, log_, out_;
+};
+
+// Records what the reader states before OpenMesh's importer gets to "fix" it: the importer
+// drops faces with bad indices and duplicates the vertices of faces that would make an edge
+// non-manifold, which would hide exactly the defects validation has to report.
+class RecordingImporter : public OpenMesh::IO::ImporterT<TriMesh> {
+  using Base = OpenMesh::IO::ImporterT<TriMesh>;
+
+ public:
+  explicit RecordingImporter(TriMesh& mesh) : Base(mesh) {}
+
+  OpenMesh::VertexHandle add_vertex(const OpenMesh::Vec3f& p) override { return note(Base::add_vertex(p)); }
+  OpenMesh::VertexHandle add_vertex(const OpenMesh::Vec3d& p) override { return note(Base::add_vertex(p)); }
+  OpenMesh::VertexHandle add_vertex() override { return note(Base::add_vertex()); }
+
+  OpenMesh::FaceHandle add_face(const VHandles& face) override {
+    faces.emplace_back();
+    faces.back().reserve(face.size());
+    for (const auto& vh : face) {
+      const int h = vh.idx();
+      // A handle the reader never got from add_vertex (an index past the vertex list) maps to
+      // kNone, reported below as out of range.
+      faces.back().push_back(h >= 0 && static_cast<std::size_t>(h) < index_of.size()
+                                 ? index_of[static_cast<std::size_t>(h)]
+                                 : kNone);
+    }
+    return Base::add_face(face);
+  }
+
+  /// Reader handles in the order the file lists the vertices.
+  std::vector<OpenMesh::VertexHandle> vertices;
+  std::vector<std::vector<std::uint32_t>> faces;
+
+ private:
+  OpenMesh::VertexHandle note(OpenMesh::VertexHandle vh) {
+    const auto h = static_cast<std::size_t>(vh.idx());
+    if (index_of.size() <= h) index_of.resize(h + 1, kNone);
+    index_of[h] = static_cast<std::uint32_t>(vertices.size());
+    vertices.push_back(vh);
+    return vh;
+  }
+  std::vector<std::uint32_t> index_of;  // mesh handle -> file vertex index
+};
+
+// OpenMesh's text readers do not report a "nan" or "inf" coordinate: the OFF reader's stream
+// fails and reads zeros from there on, the OBJ reader drops the vertex (shifting every later
+// index). Both would surface as some unrelated defect, so text files are searched for such a
+// number first. Returns what is wrong and where, or "" when the file has none. Binary files are
+// left to the check on the positions read.
+std::string non_finite_number(const std::string& text, const std::string& ext) {
+  auto lower = [](char ch) { return ch >= 'A' && ch <= 'Z' ? static_cast<char>(ch - 'A' + 'a') : ch; };
+  bool suspect = false;  // cheap pass: most files contain neither word anywhere
+  for (std::size_t i = 0; i + 2 < text.size() && !suspect; ++i) {
+    const char a = lower(text[i]), b = lower(text[i + 1]), c = lower(text[i + 2]);
+    suspect = (a == 'n' && b == 'a' && c == 'n') || (a == 'i' && b == 'n' && c == 'f');
+  }
+  if (!suspect) return {};
+
+  auto non_finite = [&](std::string_view tok) {
+    if (!tok.empty() && (tok[0] == '+' || tok[0] == '-')) tok.remove_prefix(1);
+    if (tok.size() < 3) return false;
+    const std::string head{lower(tok[0]), lower(tok[1]), lower(tok[2])};
+    return head == "nan" || head == "inf";
+  };
+  std::istringstream lines(text);
+  std::string line;
+  std::size_t line_no = 0;
+  // Vertex records: how many are still to come (OFF, PLY) and the index of the next one.
+  enum class State {
+    Header,
+    Counts,
+    Vertices,
+    Free
+  } state = ext == ".obj" || ext == ".stl" ? State::Free : State::Header;
+  std::size_t vertices_left = 0, vertex = 0, ply_vertices = 0;
+  bool ply_vertex_first = false, ply_seen_element = false;
+  while (std::getline(lines, line)) {
+    ++line_no;
+    std::istringstream words(line);
+    std::vector<std::string> tok{std::istream_iterator<std::string>(words),
+                                 std::istream_iterator<std::string>()};
+    tok.erase(std::find_if(tok.begin(), tok.end(), [](const std::string& t) { return t[0] == '#'; }),
+              tok.end());
+    if (tok.empty()) continue;
+    bool is_vertex = false;
+    if (ext == ".obj") {
+      is_vertex = tok[0] == "v";
+      if (!is_vertex) continue;
+      tok.erase(tok.begin());
+    } else if (ext == ".stl") {
+      if (tok[0] != "vertex") continue;
+      tok.erase(tok.begin());
+    } else if (ext == ".off") {
+      if (state == State::Header) {
+        if (tok[0].find("BINARY") != std::string::npos || (tok.size() > 1 && tok[1] == "BINARY")) return {};
+        state = State::Counts;
+        if (tok.size() == 1) continue;
+        tok.erase(tok.begin());  // counts on the keyword's line
+      }
+      if (state == State::Counts) {
+        vertices_left = std::strtoull(tok[0].c_str(), nullptr, 10);
+        state = State::Vertices;
+        continue;
+      }
+      is_vertex = state == State::Vertices && vertices_left > 0;
+    } else {  // .ply
+      if (state == State::Header) {
+        if (tok[0] == "format" && tok.size() > 1 && tok[1] != "ascii") return {};
+        if (tok[0] == "element" && tok.size() > 2) {
+          if (!ply_seen_element && tok[1] == "vertex") {
+            ply_vertex_first = true;
+            ply_vertices = std::strtoull(tok[2].c_str(), nullptr, 10);
+          }
+          ply_seen_element = true;
+        }
+        if (tok[0] == "end_header") {
+          state = State::Vertices;
+          vertices_left = ply_vertex_first ? ply_vertices : 0;
+        }
+        continue;
+      }
+      is_vertex = vertices_left > 0;
+    }
+    const bool bad = std::any_of(tok.begin(), tok.end(), [&](const std::string& t) { return non_finite(t); });
+    if (bad && is_vertex)
+      return "vertex " + std::to_string(vertex) + " has a non-finite coordinate (line " +
+             std::to_string(line_no) + ")";
+    if (bad) return "line " + std::to_string(line_no) + " has a non-finite number";
+    if (is_vertex) {
+      ++vertex;
+      if (vertices_left > 0) --vertices_left;
+    }
+  }
+  return {};
+}
+
+// OpenMesh's OFF reader takes neither comments nor the counts on the keyword's line, both of
+// which the format allows; such text is rewritten into the plain layout it reads. Binary OFF is
+// returned as is.
+std::string plain_off(std::string text) {
+  const std::size_t eol = text.find('\n');
+  const std::string first = text.substr(0, eol);
+  if (first.find("BINARY") != std::string::npos) return text;
+  std::istringstream head(first);
+  std::string keyword, more;
+  const bool counts_on_keyword_line = static_cast<bool>(head >> keyword >> more) && more[0] != '#';
+  if (text.find('#') == std::string::npos && !counts_on_keyword_line) return text;
+  std::string out;
+  out.reserve(text.size());
+  std::istringstream lines(std::move(text));
+  std::string line;
+  bool header = true;
+  while (std::getline(lines, line)) {
+    line.erase(std::min(line.find('#'), line.size()));
+    if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
+    if (header) {  // keyword alone on its line, counts (if any) on the next
+      std::istringstream words(line);
+      std::string word;
+      words >> word;
+      out += word + '\n';
+      line.erase(0, line.find(word) + word.size());
+      header = false;
+      if (line.find_first_not_of(" \t\r") == std::string::npos) continue;
+    }
+    out += line;
+    out += '\n';
+  }
+  return out;
+}
+
+}  // namespace
+
+std::shared_ptr<const MeshLeaf> MeshLeaf::load(const std::filesystem::path& file, bool repair, MeshInside inside) {
+  const std::string name = file.string();
+  std::string ext = file.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char ch) { return static_cast<char>(std::tolower(ch)); });
+  if (ext != ".off" && ext != ".obj" && ext != ".ply" && ext != ".stl")
+    fail(name, "cannot read files of type '" + ext + "' (OFF, OBJ, PLY or STL)");
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(file, ec)) fail(name, "cannot read it: no such file");
+
+  std::string text;
+  {
+    std::ifstream in(file, std::ios::binary);
+    text.assign(std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>());
+    if (!in && !in.eof()) fail(name, "cannot read it: the file cannot be opened");
+  }
+  if (const std::string bad = non_finite_number(text, ext); !bad.empty()) fail(name, bad);
+
+  TriMesh scratch;
+  RecordingImporter importer(scratch);
+  {
+    QuietOpenMesh quiet;
+    OpenMesh::IO::Options options;
+    bool ok = false;
+    if (ext == ".off") {  // from memory: the text may have been rewritten
+      std::istringstream stream(plain_off(std::move(text)));
+      ok = OpenMesh::IO::IOManager().read(stream, ext, importer, options);
+    } else {
+      text.clear();
+      text.shrink_to_fit();
+      ok = OpenMesh::IO::IOManager().read(file.string(), importer, options);
+    }
+    std::string format = ext.substr(1);
+    std::transform(format.begin(), format.end(), format.begin(),
+                   [](unsigned char ch) { return static_cast<char>(std::toupper(ch)); });
+    if (!ok) fail(name, "cannot read it as " + format + " (unreadable or malformed)");
+  }
+
+  std::vector<glm::dvec3> positions(importer.vertices.size());
+  for (std::size_t v = 0; v < positions.size(); ++v) {
+    const auto& q = scratch.point(importer.vertices[v]);
+    positions[v] = glm::dvec3(q[0], q[1], q[2]);
+  }
+  std::vector<glm::uvec3> triangles;
+  triangles.reserve(importer.faces.size());
+  for (std::size_t f = 0; f < importer.faces.size(); ++f) {
+    const auto& face = importer.faces[f];
+    const std::string where = "face " + std::to_string(f);
+    if (face.size() < 3) fail(name, where + " has only " + std::to_string(face.size()) + " vertices");
+    for (std::size_t i = 0; i < face.size(); ++i) {
+      if (face[i] == kNone) fail(name, where + " has an out-of-range vertex index");
+      for (std::size_t j = 0; j < i; ++j)
+        if (face[i] == face[j]) fail(name, where + " repeats vertex " + std::to_string(face[i]));
+    }
+    for (std::size_t i = 1; i + 1 < face.size(); ++i) triangles.emplace_back(face[0], face[i], face[i + 1]);
+  }
+  return build(std::move(positions), std::move(triangles), importer.faces.size(), name, repair, inside);
+}
+
+const TriMeshHolder& MeshLeaf::openmesh() const {
+  std::call_once(openmesh_once_, [this] {
+    auto holder = std::make_unique<TriMeshHolder>();
+    TriMesh& m = holder->mesh;
+    m.reserve(positions().size(), 3 * triangles().size() / 2, triangles().size());
+    for (const glm::dvec3& p : positions()) m.add_vertex(TriMesh::Point(p.x, p.y, p.z));
+    // Through OpenMesh's importer, so a vertex where two shells touch (which a half-edge mesh
+    // cannot represent) gets duplicated instead of losing the face.
+    QuietOpenMesh quiet;
+    OpenMesh::IO::ImporterT<TriMesh> importer(m);
+    std::vector<OpenMesh::VertexHandle> face(3);
+    for (const glm::uvec3& t : triangles()) {
+      for (int k = 0; k < 3; ++k)
+        face[static_cast<std::size_t>(k)] = OpenMesh::VertexHandle(static_cast<int>(t[k]));
+      importer.add_face(face);
+    }
+    openmesh_ = std::move(holder);
+  });
+  return *openmesh_;
+}
+
+std::shared_ptr<const MeshLeaf> MeshCache::get(const std::filesystem::path& file, bool repair, MeshInside inside) {
+  std::error_code ec;
+  std::filesystem::path key_path = std::filesystem::weakly_canonical(std::filesystem::absolute(file), ec);
+  if (ec) key_path = std::filesystem::absolute(file).lexically_normal();
+  const std::string key = key_path.string() + (repair ? "\n+repair" : "\n") + to_string(inside);
+  if (auto it = meshes_.find(key); it != meshes_.end()) return it->second;
+  auto leaf = MeshLeaf::load(file, repair, inside);
+  meshes_.emplace(key, leaf);
+  return leaf;
+}
+
+}  // namespace ht
