@@ -1,7 +1,8 @@
 // Mesh-leaf field queries through the reference evaluator (double, one Embree point query per
 // point): bunny00 at points within its support radius; 1 and 2 threads (TBB arenas). Winding
 // numbers (nodes/winding.hpp) on bunny00 with holes, one thread: the exact sum, the
-// hierarchical estimate, and the exact-where-it-matters inside test.
+// hierarchical estimate, and the exact-where-it-matters inside test. Mesh-leaf queries in
+// brick-shaped blocks, point by point and batched.
 #include "bench/bench_util.hpp"
 #include "nodes/mesh_leaf.hpp"
 #include "nodes/winding.hpp"
@@ -95,5 +96,48 @@ BENCHMARK(BM_Winding_Bunny00)
     ->ArgsProduct({{0, 1, 2}, {0, 1}})
     ->ArgNames({"exact_estimate_inside", "near"})
     ->Unit(benchmark::kMillisecond);
+
+// Mesh-leaf queries in blocks, as the polygonizer's bricks ask them: 8 x 8 x 4 points a cell
+// apart (1/100 of the box's diagonal) at every block position of bunny00's box grown by a tenth,
+// radius 3 cells. Arg: 0 query() point by point, 1 query_batch() a block at a time (a block the
+// radius does not reach answered by one query and one inside test). One thread.
+void BM_MeshLeafBlocks(benchmark::State& state) {
+  static const auto leaf = MeshLeaf::load(bench::cgal_mesh("bunny00.off"));
+  const Aabb box = leaf->bounds().expanded(0.1 * glm::length(leaf->bounds().size()));
+  const float h = static_cast<float>(0.01 * glm::length(leaf->bounds().size())), radius = 3.0f * h;
+  std::vector<float> xs, ys, zs;  // blocks of 256 consecutive points
+  const glm::ivec3 blocks = glm::ivec3(glm::ceil(box.size() / (glm::dvec3(8, 8, 4) * double(h))));
+  for (int bz = 0; bz < blocks.z; ++bz)
+    for (int by = 0; by < blocks.y; ++by)
+      for (int bx = 0; bx < blocks.x; ++bx)
+        for (int k = 0; k < 4; ++k)
+          for (int j = 0; j < 8; ++j)
+            for (int i = 0; i < 8; ++i) {
+              xs.push_back(float(box.lo.x) + h * float(8 * bx + i));
+              ys.push_back(float(box.lo.y) + h * float(8 * by + j));
+              zs.push_back(float(box.lo.z) + h * float(4 * bz + k));
+            }
+  std::vector<float> d(256);
+  std::vector<std::uint8_t> in(256);
+  std::size_t inside = 0;
+  for (auto _ : state) {
+    inside = 0;
+    for (std::size_t at = 0; at < xs.size(); at += 256) {
+      if (state.range(0) == 1) {
+        leaf->query_batch(&xs[at], &ys[at], &zs[at], 256, radius, d.data(), in.data());
+      } else {
+        for (std::size_t i = 0; i < 256; ++i) {
+          const MeshLeaf::Closest c = leaf->query({xs[at + i], ys[at + i], zs[at + i]}, double(radius));
+          in[i] = c.inside ? 1 : 0;
+        }
+      }
+      for (std::uint8_t f : in) inside += f;
+    }
+    benchmark::DoNotOptimize(inside);
+  }
+  state.counters["inside"] = static_cast<double>(inside);
+  state.SetItemsProcessed(static_cast<std::int64_t>(state.iterations() * xs.size()));
+}
+BENCHMARK(BM_MeshLeafBlocks)->Arg(0)->Arg(1)->ArgNames({"batch"})->Unit(benchmark::kMillisecond);
 
 }  // namespace

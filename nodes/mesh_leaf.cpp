@@ -307,12 +307,42 @@ bool MeshLeaf::inside(const glm::dvec3& p) const {
 
 void MeshLeaf::query_batch(const float* xs, const float* ys, const float* zs, std::size_t n, float radius,
                            float* distance, std::uint8_t* inside) const {
+  if (n >= 8 && !winding_ && shared_far_block(xs, ys, zs, n, radius, distance, inside)) return;
   for (std::size_t i = 0; i < n; ++i) {
     const Closest c = query(glm::dvec3(xs[i], ys[i], zs[i]), static_cast<double>(radius));
     distance[i] =
         std::isfinite(c.distance) ? static_cast<float>(c.distance) : std::numeric_limits<float>::infinity();
     inside[i] = c.inside ? 1 : 0;
   }
+}
+
+// The work a block shares (Embree 3's point-query packets run their lanes one by one, so there is
+// none to share inside a query): the ball around the block's box. When no triangle comes within
+// the radius of it, none comes within the radius of any of the block's points, and a closed
+// surface does not cross the ball, so its points are all on the side of its centre: one query and
+// one inside test answer the block. A winding leaf's inside varies off the surface: not for it.
+bool MeshLeaf::shared_far_block(const float* xs, const float* ys, const float* zs, std::size_t n, float radius,
+                                float* distance, std::uint8_t* inside) const {
+  glm::dvec3 lo(xs[0], ys[0], zs[0]), hi = lo;
+  for (std::size_t i = 1; i < n; ++i) {
+    const glm::dvec3 p(xs[i], ys[i], zs[i]);
+    lo = glm::min(lo, p);
+    hi = glm::max(hi, p);
+  }
+  if (!std::isfinite(lo.x + lo.y + lo.z + hi.x + hi.y + hi.z)) return false;
+  const glm::dvec3 centre = 0.5 * (lo + hi);
+  // The ball's radius rounded up a little, so that the points' own queries (whose slack follows
+  // their coordinates) could not reach a triangle this one misses.
+  const double reach = (0.5 * glm::length(hi - lo) + static_cast<double>(radius)) * (1.0 + 1e-6) +
+                       1e-6 * std::max(accel_->scale, glm::length(centre));
+  const Closest c = query(centre, reach);
+  if (std::isfinite(c.distance)) return false;
+  const std::uint8_t side = c.inside ? 1 : 0;
+  for (std::size_t i = 0; i < n; ++i) {
+    distance[i] = std::numeric_limits<float>::infinity();
+    inside[i] = side;
+  }
+  return true;
 }
 
 int MeshLeaf::box_side(const Aabb& box) const {

@@ -103,6 +103,8 @@ class MeshLeaf {
   MeshInside inside_mode() const { return report_.inside; }
   /// Batched form of query() for float lanes: n points as three coordinate arrays; writes
   /// distance[i] (+infinity beyond radius) and inside[i] (0/1). Thread-safe; no allocation.
+  /// A block of points (a polygonizer brick's) farther than the radius from the surface costs
+  /// one query and one inside test, not one each (closed leaves).
   void query_batch(const float* xs, const float* ys, const float* zs, std::size_t n, float radius,
                    float* distance, std::uint8_t* inside) const;
 
@@ -132,6 +134,10 @@ class MeshLeaf {
   static std::shared_ptr<const MeshLeaf> build(std::vector<glm::dvec3> positions,
                                                std::vector<glm::uvec3> triangles, std::size_t input_faces,
                                                std::string name, bool repair, MeshInside inside);
+  /// query_batch's shared answer for a block the surface's radius does not reach; false when it
+  /// does (then every point is queried).
+  bool shared_far_block(const float* xs, const float* ys, const float* zs, std::size_t n, float radius,
+                        float* distance, std::uint8_t* inside) const;
   struct Accel;  // Embree device, scene and pseudo-normals
   std::string name_;
   std::shared_ptr<TriangleMesh> surface_ = std::make_shared<TriangleMesh>();
