@@ -348,11 +348,13 @@ TriangleMesh polygonize(std::shared_ptr<const Graph> graph, NodeId root, double 
   stats.seconds_classify = seconds_since(t0);
   if (options.progress) options.progress(0.05);
 
-  // 2. Sample every active brick's 9^3 grid points with a tape specialized to the brick.
+  // 2. Sample every active brick's 9^3 grid points with a tape specialized to the brick. A point
+  //    on a brick's + faces belongs to the brick across them (as the labels below say); when
+  //    that brick is sampled too, the value is copied from it afterwards, not evaluated twice.
   t0 = std::chrono::steady_clock::now();
   std::vector<float> values(active.size() * kBrickPoints);
   std::vector<std::shared_ptr<const Tape>> tapes(active.size());
-  std::atomic<std::size_t> done{0};
+  std::atomic<std::size_t> done{0}, evaluated{0};
   auto report = [&](double base, double span) {
     const std::size_t d = ++done;
     if (options.progress && tbb::this_task_arena::current_thread_index() == 0 &&
@@ -360,39 +362,75 @@ TriangleMesh polygonize(std::shared_ptr<const Graph> graph, NodeId root, double 
       options.progress(base + span * double(d) / double(active.size()));
   };
   auto cancelled = [&] { return options.cancel && options.cancel->load(std::memory_order_relaxed); };
+  // The brick that owns local point `local` of brick b, where it is `at` there; b itself, or a
+  // neighbour across a + face that the grid holds.
+  auto owner_of = [&](glm::ivec3 b, glm::ivec3 local, glm::ivec3& at) {
+    glm::ivec3 owner = b;
+    at = local;
+    for (int axis = 0; axis < 3; ++axis)
+      if (local[axis] == kCells && b[axis] + 1 < grid.bricks[axis]) {
+        owner[axis] += 1;
+        at[axis] = 0;
+      }
+    return owner;
+  };
+  // The slot of the sampled brick that owns the point, or kNone when b evaluates it itself.
+  auto sampled_owner = [&](glm::ivec3 b, glm::ivec3 local, std::size_t& at_index) -> std::uint32_t {
+    glm::ivec3 at;
+    const glm::ivec3 owner = owner_of(b, local, at);
+    if (owner == b) return kNone;
+    const std::size_t oi = grid.brick_index(owner);
+    at_index = std::size_t(at.x + kPoints * (at.y + kPoints * at.z));
+    return state[oi] == kActive ? slot[oi] : kNone;
+  };
   const BlockTapes blocks = block_tapes(graph, root, T, grid, active);
   tbb::parallel_for(std::size_t(0), active.size(), [&](std::size_t a) {
     if (cancelled()) return;
     const glm::ivec3 b = grid.brick_at(active[a]);
     tapes[a] = std::make_shared<const Tape>(narrow_tape(*blocks.tapes[blocks.of[a]], grid.box(b, b + 1)));
     const TapeEvaluator eval(tapes[a]);
-    float xs[kBrickPoints], ys[kBrickPoints], zs[kBrickPoints];
-    int n = 0;
+    float xs[kBrickPoints], ys[kBrickPoints], zs[kBrickPoints], fs[kBrickPoints];
+    std::uint16_t which[kBrickPoints];
+    int m = 0, n = 0;
     for (int k = 0; k < kPoints; ++k)
       for (int j = 0; j < kPoints; ++j)
         for (int i = 0; i < kPoints; ++i, ++n) {
+          std::size_t at = 0;
+          if (sampled_owner(b, {i, j, k}, at) != kNone) continue;
           const glm::dvec3 p = grid.position(glm::i64vec3(b) * std::int64_t(kCells) + glm::i64vec3(i, j, k));
-          xs[n] = static_cast<float>(p.x);
-          ys[n] = static_cast<float>(p.y);
-          zs[n] = static_cast<float>(p.z);
+          which[m] = static_cast<std::uint16_t>(n);
+          xs[m] = static_cast<float>(p.x);
+          ys[m] = static_cast<float>(p.y);
+          zs[m] = static_cast<float>(p.z);
+          ++m;
         }
-    for (int at = 0; at < kBrickPoints; at += kBlock)
-      eval.field_block(xs + at, ys + at, zs + at, std::min(kBlock, kBrickPoints - at), values.data() + a * kBrickPoints + at);
+    for (int at = 0; at < m; at += kBlock) eval.field_block(xs + at, ys + at, zs + at, std::min(kBlock, m - at), fs + at);
+    for (int q = 0; q < m; ++q) values[a * kBrickPoints + which[q]] = fs[q];
+    evaluated += std::size_t(m);
     report(0.05, 0.55);
   });
   if (cancelled()) throw MeshCancelled("meshing was cancelled");
-  stats.points_evaluated = active.size() * kBrickPoints;
+  // The + face points from their owners, which evaluated them themselves (an owner's point at
+  // `at` lies on none of its own + faces that lead to a sampled brick).
+  tbb::parallel_for(std::size_t(0), active.size(), [&](std::size_t a) {
+    const glm::ivec3 b = grid.brick_at(active[a]);
+    for (int k = 0; k < kPoints; ++k)
+      for (int j = 0; j < kPoints; ++j)
+        for (int i = 0; i < kPoints; ++i) {
+          if (i < kCells && j < kCells && k < kCells) continue;
+          std::size_t at = 0;
+          const std::uint32_t s = sampled_owner(b, {i, j, k}, at);
+          if (s != kNone) values[a * kBrickPoints + std::size_t(i + kPoints * (j + kPoints * k))] = values[std::size_t(s) * kBrickPoints + at];
+        }
+  });
+  stats.points_evaluated = evaluated.load();
   stats.seconds_sample = seconds_since(t0);
 
   // Inside labels: a grid point shared by bricks takes the label of the brick that owns it (the
   // one where it is not on the + faces), so that every cell around it agrees.
   auto inside = [&](glm::ivec3 b, glm::ivec3 local, const float* own) {
-    glm::ivec3 owner = b, at = local;
-    for (int axis = 0; axis < 3; ++axis)
-      if (local[axis] == kCells && b[axis] + 1 < grid.bricks[axis]) {
-        owner[axis] += 1;
-        at[axis] = 0;
-      }
+    glm::ivec3 at;
+    const glm::ivec3 owner = owner_of(b, local, at);
     if (owner == b) return own[local.x + kPoints * (local.y + kPoints * local.z)] >= float(T);
     const std::size_t oi = grid.brick_index(owner);
     if (state[oi] != kActive) return state[oi] == kInside;
