@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <cstdio>
 #include <filesystem>
 #include <string>
 #include <vector>
@@ -22,8 +23,15 @@ TEST(Examples, EveryExampleMeshesClosedOnItsSurface) {
     if (e.path().extension() == ".json") scenes.push_back(e.path());
   std::sort(scenes.begin(), scenes.end());
   ASSERT_GE(scenes.size(), 6u);
+  const bool igea = std::filesystem::exists(std::filesystem::path(HYBRIDTREE_SOURCE_DIR) / "data/meshes/igea-67k.ply");
   for (const auto& file : scenes) {
     SCOPED_TRACE(file.filename().string());
+    // Igea comes from ../shared beside the checkout; where that is missing, so are its scenes.
+    if (!igea && test::shared_mesh("igea-67k.ply").empty() &&
+        (file.filename() == "bowl.json" || file.filename() == "restoration.json")) {
+      std::printf("skipping %s: no igea-67k.ply in data/meshes/ or ../shared\n", file.filename().c_str());
+      continue;
+    }
     const Tree tree = load_scene(file);
     const double h = tree.mesher_settings().precision;
     ASSERT_GT(h, 0.0) << "every example says its precision";
