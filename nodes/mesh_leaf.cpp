@@ -7,6 +7,7 @@
 // each shell from its nesting depth and signed volume -> angle-weighted pseudo-normals.
 #include "nodes/mesh_leaf.hpp"
 
+#include "nodes/mesh_text.hpp"
 #include "nodes/openmesh_io.hpp"
 #include "nodes/primitives.hpp"
 #include "nodes/trimesh.hpp"
@@ -688,14 +689,19 @@ std::shared_ptr<const MeshLeaf> MeshLeaf::load(const std::filesystem::path& file
   }
   if (const std::string bad = non_finite_number(text, ext); !bad.empty()) fail(name, bad);
 
+  // OFF and OBJ are read from memory (rewritten for OpenMesh's readers, nodes/mesh_text.hpp).
+  if (ext == ".off") text = plain_off(std::move(text));
+  if (ext == ".obj") text = without_material_libraries(std::move(text));
+  if (const std::string bad = stated_counts_problem(text, ext); !bad.empty()) fail(name, bad);
+
   TriMesh scratch;
   RecordingImporter importer(scratch);
   {
     QuietOpenMesh quiet;
     OpenMesh::IO::Options options;
     bool ok = false;
-    if (ext == ".off") {  // from memory: the text may have been rewritten
-      std::istringstream stream(plain_off(std::move(text)));
+    if (ext == ".off" || ext == ".obj") {
+      std::istringstream stream(std::move(text));
       ok = OpenMesh::IO::IOManager().read(stream, ext, importer, options);
     } else {
       text.clear();

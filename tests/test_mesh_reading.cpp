@@ -1,0 +1,111 @@
+// Mesh files as the fuzzers feed them (fuzz/fuzz_mesh_*.cpp): each real bug they found, as a
+// focused test of MeshLeaf::load. The inputs themselves are kept in fuzz/corpus/ and replayed by
+// the fuzz_replay.* tests; these say what the behaviour must be.
+#include "nodes/mesh_leaf.hpp"
+#include "tests/support/test_support.hpp"
+
+#include <gtest/gtest.h>
+
+#include <fcntl.h>
+#include <sys/stat.h>
+#include <unistd.h>
+
+#include <chrono>
+#include <future>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace ht {
+namespace {
+
+const std::string kTetraObj = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n";
+
+// An OBJ's "mtllib" was opened by OpenMesh's reader wherever it pointed: "../../dev/zero" read
+// forever, a FIFO blocked forever. Only geometry is read, so the library is never opened; here
+// it is a FIFO, which a reader opening it would wait on until the test writes to it.
+TEST(MeshReading, ObjMaterialLibraryIsNeverOpened) {
+  const auto dir = test::temp_dir("mesh-mtllib");
+  const auto fifo = dir / "blocks.mtl";
+  ASSERT_EQ(::mkfifo(fifo.c_str(), 0600), 0);
+  test::write_file(dir / "tet.obj", "mtllib blocks.mtl\nusemtl stone\n" + kTetraObj);
+  auto load = std::async(std::launch::async, [&] { return MeshLeaf::load(dir / "tet.obj"); });
+  const bool finished = load.wait_for(std::chrono::seconds(20)) == std::future_status::ready;
+  if (!finished) {  // let the blocked reader go: it sees an empty material file
+    const int fd = ::open(fifo.c_str(), O_WRONLY);
+    if (fd >= 0) ::close(fd);
+  }
+  EXPECT_TRUE(finished) << "the OBJ reader opened the material library";
+  EXPECT_EQ(load.get()->report().triangles, 4u);
+
+  // The same with a path out of the folder, to a file that never ends.
+  test::write_file(dir / "zero.obj", "  mtllib ../../../../../../../../dev/zero\n" + kTetraObj);
+  EXPECT_EQ(MeshLeaf::load(dir / "zero.obj")->report().triangles, 4u);
+  std::filesystem::remove_all(dir);
+}
+
+std::string message_of(const std::filesystem::path& file) {
+  try {
+    MeshLeaf::load(file);
+  } catch (const MeshError& e) {
+    return e.what();
+  }
+  return "loaded";
+}
+
+const std::string kPlyHeader = "ply\nformat ascii 1.0\nelement vertex 4\nproperty float x\nproperty float y\n"
+                               "property float z\nelement face FACES\nproperty list uchar int vertex_indices\nend_header\n";
+const std::string kTetraBody = "0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n";
+
+std::string ply_stating(const std::string& faces, const std::string& body) {
+  std::string header = kPlyHeader;
+  header.replace(header.find("FACES"), 5, faces);
+  return header + body;
+}
+
+// Counts a header states (or fails to state) were trusted: an empty OFF file reserved 6 GB; OFF stating 30 million faces
+// in 50 bytes took 46 s and 9 GB to end in a wrong message; ASCII PLY stating more faces than it
+// holds was read to its end and accepted (two triangles on one face, a solid of no volume); a
+// PLY count that is not a number took 65 s to end in bad_alloc.
+TEST(MeshReading, CountsBeyondTheFileAreRefusedAtOnce) {
+  const auto dir = test::temp_dir("mesh-counts");
+  test::write_file(dir / "faces.off", "OFF\n4 30000000 0\n0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 1 2\n");
+  test::write_file(dir / "vertices.off", "OFF 1000000000 4 0\n0 0 0\n");
+  test::write_file(dir / "negative.off", "OFF\n-1 4 0\n0 0 0\n");
+  test::write_file(dir / "empty.off", "");
+  test::write_file(dir / "keyword.off", "OFF\n");
+  test::write_file(dir / "faces.ply", ply_stating("30000000", "0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 1 2\n"));
+  test::write_file(dir / "binary.ply",
+                   "ply\nformat binary_little_endian 1.0\nelement vertex 2000000000\nproperty double x\n"
+                   "property double y\nproperty double z\nend_header\n\1\2\3");
+  const std::string tet_ply = ply_stating("4", kTetraBody);
+  test::write_file(dir / "nothing.ply", "ply\nformat ascii 1.0\nelement junk 2000000000\n" +
+                                            tet_ply.substr(tet_ply.find("element vertex")));
+  test::write_file(dir / "word.ply", kPlyHeader + kTetraBody);
+  const auto start = std::chrono::steady_clock::now();
+  for (const auto& [name, expected] : std::vector<std::pair<std::string, std::string>>{
+           {"faces.off", "faces.off: the header states 4 vertices and 30000000 faces, more than the file holds "
+                         "(16 numbers after the counts; a truncated file?)"},
+           {"vertices.off", "vertices.off: the header states 1000000000 vertices and 4 faces"},
+           {"negative.off", "negative.off: the header states a negative count (-1)"},
+           {"empty.off", "empty.off: no OFF keyword on its first line"},
+           {"keyword.off", "keyword.off: no vertex and face counts after the OFF keyword"},
+           {"faces.ply", "faces.ply: the header states 4 vertex, 30000000 face, more than the file holds (16 words"},
+           {"binary.ply", "binary.ply: the header states 2000000000 vertex, more than the file holds (3 bytes"},
+           {"nothing.ply", "nothing.ply: element \"junk\" states 2000000000 records but no properties"},
+           {"word.ply", "word.ply: the header's count of element \"face\" is not a whole number (FACES)"}}) {
+    const std::string m = message_of(dir / name);
+    EXPECT_NE(m.find(expected), std::string::npos) << m;
+  }
+  EXPECT_LT(std::chrono::steady_clock::now() - start, std::chrono::seconds(5));
+
+  // Counts that fit still load, whatever the layout of the numbers.
+  test::write_file(dir / "tet.ply", tet_ply);
+  EXPECT_EQ(message_of(dir / "tet.ply"), "loaded");
+  test::write_file(dir / "tet.off", "OFF\n4 4 6\n" + kTetraBody);
+  EXPECT_EQ(message_of(dir / "tet.off"), "loaded");
+  std::filesystem::remove_all(dir);
+}
+
+}  // namespace
+}  // namespace ht
