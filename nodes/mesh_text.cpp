@@ -4,6 +4,7 @@
 // scalars and list counts (binary). Sums are in double: a count may be any 64-bit number.
 #include "nodes/mesh_text.hpp"
 
+#include <algorithm>
 #include <cctype>
 #include <cstdint>
 #include <sstream>
@@ -44,32 +45,54 @@ bool parse_count(const std::string& word, std::uint64_t& n) {
   return used == word.size();
 }
 
+// The word starting at or after `at`, which moves past it; empty at the end of the text.
+std::string_view next_word(std::string_view text, std::size_t& at) {
+  while (at < text.size() && is_space(text[at])) ++at;
+  const std::size_t start = at;
+  while (at < text.size() && !is_space(text[at])) ++at;
+  return text.substr(start, at - start);
+}
+
 std::string truncated(const std::string& stated, const std::string& holds) {
   return "the header states " + stated + ", more than the file holds (" + holds + "; a truncated file?)";
 }
 
+// The OFF keyword's optional prefixes, in order ([ST][C][N][4][n]OFF); false when `word` is not
+// one. `dimension` is set for nOFF, whose counts follow the vertex dimension.
+bool off_keyword(std::string_view word, bool& dimension) {
+  for (const std::string_view prefix : {"ST", "C", "N", "4"})
+    if (word.starts_with(prefix)) word.remove_prefix(prefix.size());
+  dimension = word.starts_with('n');
+  if (dimension) word.remove_prefix(1);
+  return word == "OFF";
+}
+
 std::string off_counts(const std::string& text) {
-  const std::size_t eol = text.find('\n');
-  const std::string_view first(text.data(), eol == std::string::npos ? text.size() : eol);
+  const std::string_view first(text.data(), std::min(text.find('\n'), text.size()));
+  if (first.find("BINARY") != std::string_view::npos) return {};  // counts in binary: the reader's to check
   // Given a stream, OpenMesh's OFF reader reads the header without checking it: with no counts
-  // it reserved room for whatever its variables held (an empty file asked for 6 GB).
-  if (first.find("OFF") == std::string_view::npos) return "no OFF keyword on its first line";
-  // Binary OFF and the dimension-prefixed variants (nOFF, 4OFF) lay their records out otherwise.
-  if (first.find("BINARY") != std::string_view::npos || first[0] == 'n' || first[0] == '4') return {};
-  std::istringstream counts(eol == std::string::npos ? std::string() : text.substr(eol + 1, 200));
-  std::string nv_word, nf_word;
-  if (!(counts >> nv_word >> nf_word)) return "no vertex and face counts after the OFF keyword";
-  std::uint64_t nv = 0, nf = 0;
+  // ("", "OFF", "4OFF2") it reserved room for whatever its variables held (3 to 14 GB).
+  std::size_t at = 0;
+  const std::string_view keyword = next_word(text, at);
+  bool dimension = false;
+  if (!off_keyword(keyword, dimension))
+    return "the first line must be an OFF keyword ([ST][C][N][4][n]OFF), not \"" +
+           std::string(first.substr(0, 40)) + "\"";
+  if (dimension && next_word(text, at).empty()) return "no vertex dimension after the nOFF keyword";
+  const std::string nv_word(next_word(text, at)), nf_word(next_word(text, at));
+  if (nf_word.empty()) return "no vertex and face counts after the OFF keyword";
   for (const std::string& word : {nv_word, nf_word})
     if (word[0] == '-') return "the header states a negative count (" + word + ")";
+  std::uint64_t nv = 0, nf = 0;
   if (!parse_count(nv_word, nv) || !parse_count(nf_word, nf))
     return "the vertex and face counts are not whole numbers (" + nv_word + " " + nf_word + ")";
-  // The counts' line, then three numbers per vertex and at least one (its size) per face.
-  const std::size_t body = text.find('\n', eol + 1);
-  const std::size_t words = body == std::string::npos ? 0 : words_from(text, body + 1);
-  if (3.0 * static_cast<double>(nv) + static_cast<double>(nf) <= static_cast<double>(words)) return {};
+  // Then the edge count (which nothing reads, so it is counted in), three numbers per vertex (one
+  // for nOFF, whose dimension may be anything) and at least one, its size, per face.
+  const std::size_t words = words_from(text, at);
+  const double per_vertex = dimension ? 1.0 : 3.0;
+  if (per_vertex * static_cast<double>(nv) + static_cast<double>(nf) <= static_cast<double>(words)) return {};
   return truncated(std::to_string(nv) + " vertices and " + std::to_string(nf) + " faces",
-                   std::to_string(words) + " numbers after the counts");
+                   std::to_string(words) + " numbers after the vertex and face counts");
 }
 
 struct PlyElement {

@@ -63,7 +63,8 @@ std::string ply_stating(const std::string& faces, const std::string& body) {
   return header + body;
 }
 
-// Counts a header states (or fails to state) were trusted: an empty OFF file reserved 6 GB; OFF stating 30 million faces
+// Counts a header states (or fails to state) were trusted: an empty OFF file or one starting
+// "4OFF2" reserved 3 to 14 GB; OFF stating 30 million faces
 // in 50 bytes took 46 s and 9 GB to end in a wrong message; ASCII PLY stating more faces than it
 // holds was read to its end and accepted (two triangles on one face, a solid of no volume); a
 // PLY count that is not a number took 65 s to end in bad_alloc.
@@ -74,6 +75,7 @@ TEST(MeshReading, CountsBeyondTheFileAreRefusedAtOnce) {
   test::write_file(dir / "negative.off", "OFF\n-1 4 0\n0 0 0\n");
   test::write_file(dir / "empty.off", "");
   test::write_file(dir / "keyword.off", "OFF\n");
+  test::write_file(dir / "4OFF2.off", "4OFF2\n");
   test::write_file(dir / "faces.ply", ply_stating("30000000", "0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 1 2\n"));
   test::write_file(dir / "binary.ply",
                    "ply\nformat binary_little_endian 1.0\nelement vertex 2000000000\nproperty double x\n"
@@ -85,10 +87,11 @@ TEST(MeshReading, CountsBeyondTheFileAreRefusedAtOnce) {
   const auto start = std::chrono::steady_clock::now();
   for (const auto& [name, expected] : std::vector<std::pair<std::string, std::string>>{
            {"faces.off", "faces.off: the header states 4 vertices and 30000000 faces, more than the file holds "
-                         "(16 numbers after the counts; a truncated file?)"},
+                         "(17 numbers after the vertex and face counts; a truncated file?)"},
            {"vertices.off", "vertices.off: the header states 1000000000 vertices and 4 faces"},
            {"negative.off", "negative.off: the header states a negative count (-1)"},
-           {"empty.off", "empty.off: no OFF keyword on its first line"},
+           {"empty.off", "empty.off: the first line must be an OFF keyword ([ST][C][N][4][n]OFF), not \"\""},
+           {"4OFF2.off", "4OFF2.off: the first line must be an OFF keyword ([ST][C][N][4][n]OFF), not \"4OFF2\""},
            {"keyword.off", "keyword.off: no vertex and face counts after the OFF keyword"},
            {"faces.ply", "faces.ply: the header states 4 vertex, 30000000 face, more than the file holds (16 words"},
            {"binary.ply", "binary.ply: the header states 2000000000 vertex, more than the file holds (3 bytes"},
