@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cstdint>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 #include <string_view>
@@ -14,6 +15,8 @@
 
 namespace ht {
 namespace {
+
+constexpr double kInfinity = std::numeric_limits<double>::infinity();
 
 bool is_space(char ch) { return std::isspace(static_cast<unsigned char>(ch)) != 0; }
 
@@ -67,17 +70,39 @@ bool off_keyword(std::string_view word, bool& dimension) {
   return word == "OFF";
 }
 
+// Binary OFF: the counts as three 32-bit integers after the keyword's line, then 3 floats per
+// vertex and at least a 32-bit size per face. The byte order is the reader's business, so the
+// counts must fit in either order.
+std::string binary_off_counts(std::string_view text, std::size_t body) {
+  if (text.size() < body + 12) return "binary OFF without its vertex and face counts";
+  double need = kInfinity;
+  for (const bool big_endian : {false, true}) {
+    std::uint32_t count[2] = {0, 0};
+    for (int c = 0; c < 2; ++c)
+      for (int b = 0; b < 4; ++b) {
+        const auto byte = static_cast<std::uint32_t>(static_cast<unsigned char>(text[body + 4 * c + b]));
+        count[c] |= byte << (8 * (big_endian ? 3 - b : b));
+      }
+    need = std::min(need, 12.0 * count[0] + 4.0 * count[1]);
+  }
+  const std::size_t have = text.size() - body - 12;
+  if (need <= static_cast<double>(have)) return {};
+  return truncated("vertex and face counts needing " + std::to_string(static_cast<std::uint64_t>(need)) + " bytes",
+                   std::to_string(have) + " bytes after them");
+}
+
 std::string off_counts(const std::string& text) {
   const std::string_view first(text.data(), std::min(text.find('\n'), text.size()));
-  if (first.find("BINARY") != std::string_view::npos) return {};  // counts in binary: the reader's to check
   // Given a stream, OpenMesh's OFF reader reads the header without checking it: with no counts
-  // ("", "OFF", "4OFF2") it reserved room for whatever its variables held (3 to 14 GB).
+  // ("", "OFF", "4OFF2") it reserved room for whatever its variables held (3 to 14 GB), and with
+  // a first line "BINARYF" it read faces for 11 s and more.
   std::size_t at = 0;
   const std::string_view keyword = next_word(text, at);
   bool dimension = false;
   if (!off_keyword(keyword, dimension))
     return "the first line must be an OFF keyword ([ST][C][N][4][n]OFF), not \"" +
            std::string(first.substr(0, 40)) + "\"";
+  if (first.find("BINARY") != std::string_view::npos) return binary_off_counts(text, first.size() + 1);
   if (dimension && next_word(text, at).empty()) return "no vertex dimension after the nOFF keyword";
   const std::string nv_word(next_word(text, at)), nf_word(next_word(text, at));
   if (nf_word.empty()) return "no vertex and face counts after the OFF keyword";

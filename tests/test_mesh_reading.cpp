@@ -64,7 +64,7 @@ std::string ply_stating(const std::string& faces, const std::string& body) {
 }
 
 // Counts a header states (or fails to state) were trusted: an empty OFF file or one starting
-// "4OFF2" reserved 3 to 14 GB; OFF stating 30 million faces
+// "4OFF2" reserved 3 to 14 GB, one starting "BINARYF" read faces for seconds; OFF stating 30 million faces
 // in 50 bytes took 46 s and 9 GB to end in a wrong message; ASCII PLY stating more faces than it
 // holds was read to its end and accepted (two triangles on one face, a solid of no volume); a
 // PLY count that is not a number took 65 s to end in bad_alloc.
@@ -76,6 +76,8 @@ TEST(MeshReading, CountsBeyondTheFileAreRefusedAtOnce) {
   test::write_file(dir / "empty.off", "");
   test::write_file(dir / "keyword.off", "OFF\n");
   test::write_file(dir / "4OFF2.off", "4OFF2\n");
+  test::write_file(dir / "BINARYF.off", "BINARYF");
+  test::write_file(dir / "binary.off", std::string("OFF BINARY\n\0\0\0\4\0\0\1\0\0\0\0\0", 23) + std::string(48, '\0'));
   test::write_file(dir / "faces.ply", ply_stating("30000000", "0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 1 2\n"));
   test::write_file(dir / "binary.ply",
                    "ply\nformat binary_little_endian 1.0\nelement vertex 2000000000\nproperty double x\n"
@@ -91,6 +93,9 @@ TEST(MeshReading, CountsBeyondTheFileAreRefusedAtOnce) {
            {"vertices.off", "vertices.off: the header states 1000000000 vertices and 4 faces"},
            {"negative.off", "negative.off: the header states a negative count (-1)"},
            {"empty.off", "empty.off: the first line must be an OFF keyword ([ST][C][N][4][n]OFF), not \"\""},
+           {"BINARYF.off", "BINARYF.off: the first line must be an OFF keyword ([ST][C][N][4][n]OFF), not \"BINARYF\""},
+           {"binary.off", "binary.off: the header states vertex and face counts needing 1072 bytes, more than the "
+                          "file holds (48 bytes after them"},
            {"4OFF2.off", "4OFF2.off: the first line must be an OFF keyword ([ST][C][N][4][n]OFF), not \"4OFF2\""},
            {"keyword.off", "keyword.off: no vertex and face counts after the OFF keyword"},
            {"faces.ply", "faces.ply: the header states 4 vertex, 30000000 face, more than the file holds (16 words"},
