@@ -5,7 +5,7 @@
 // broken ones). An input naming a mesh by anything but a bare file name is skipped: a path could
 // name any file of the machine, a huge mesh or a device that never ends, which says nothing
 // about the loader. A scene must load or be refused with one SceneError; every value it then
-// gives must be finite.
+// gives must be finite when its numbers are moderate (see moderate()).
 #include "fuzz/fuzz_support.hpp"
 
 #include "runtime/scene.hpp"
@@ -46,12 +46,22 @@ bool mesh_names_stay_in_mesh_dir(const json& doc) {
 
 bool finite(const glm::dvec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
 
+// Parameters whose squares, products and sums stay far inside float's range (the tape runs in
+// float): a scene of such numbers must have a finite field. Past them a finite answer is not
+// promised (a strength of 1e300 is past what the tape can hold), so only crashes count there.
+bool moderate(const ht::Graph& g) {
+  for (const double v : g.params)
+    if (v != 0.0 && !(std::abs(v) >= 1e-6 && std::abs(v) <= 1e6)) return false;
+  return true;
+}
+
 // The field and gradient at the origin and at points of the root's support, both evaluators. An
 // ffd needs its deformed mesh before it has a field (meshers/ffd.hpp): such scenes stop at load.
 void evaluate(const ht::Tree& tree) {
   const ht::Graph& g = tree.graph();
   for (const ht::NodeKind k : g.kind)
     if (k == ht::NodeKind::Ffd) return;
+  const bool check = moderate(g);
   std::vector<glm::dvec3> points = {glm::dvec3(0.0)};
   const ht::Aabb box = g.support(tree.root(), false);
   if (box.finite())
@@ -59,10 +69,11 @@ void evaluate(const ht::Tree& tree) {
       points.push_back(box.lo + t * box.size());
   for (const glm::dvec3& p : points) {
     const double reference = tree.reference(p), tape = tree.field(p);
-    ht::fuzz::require(std::isfinite(reference), "the reference field is not finite");
-    ht::fuzz::require(std::isfinite(tape), "the tape's field is not finite");
+    ht::fuzz::require(!check || std::isfinite(reference), "the reference field is not finite");
+    ht::fuzz::require(!check || std::isfinite(tape), "the tape's field is not finite");
   }
-  ht::fuzz::require(finite(tree.gradient(points.back())), "the tape's gradient is not finite");
+  const glm::dvec3 gradient = tree.gradient(points.back());
+  ht::fuzz::require(!check || finite(gradient), "the tape's gradient is not finite");
 }
 
 void load_and_evaluate(const std::string& text) {
