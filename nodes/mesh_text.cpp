@@ -1,11 +1,14 @@
-// Mesh file bytes before OpenMesh's readers (nodes/mesh_text.hpp). Every count is compared with
-// the least room its records can take: a vertex of ASCII OFF is three numbers and a face at least
-// its vertex count; a PLY record is at least one word per property (ASCII) or the bytes of its
-// scalars and list counts (binary). Sums are in double: a count may be any 64-bit number.
+// Mesh file text before (or instead of) OpenMesh's readers (nodes/mesh_text.hpp). Every stated
+// count is compared with the least room its records can take before anything is reserved for
+// it: a vertex of ASCII OFF is three numbers and a face at least its vertex count; a PLY record
+// is at least one word per property (ASCII) or the bytes of its scalars and list counts
+// (binary). Sums are in double: a count may be any 64-bit number.
 #include "nodes/mesh_text.hpp"
 
 #include <algorithm>
 #include <cctype>
+#include <charconv>
+#include <cmath>
 #include <cstdint>
 #include <limits>
 #include <sstream>
@@ -15,8 +18,6 @@
 
 namespace ht {
 namespace {
-
-constexpr double kInfinity = std::numeric_limits<double>::infinity();
 
 bool is_space(char ch) { return std::isspace(static_cast<unsigned char>(ch)) != 0; }
 
@@ -48,76 +49,114 @@ bool parse_count(const std::string& word, std::uint64_t& n) {
   return used == word.size();
 }
 
-// The word starting at or after `at`, which moves past it; empty at the end of the text.
-std::string_view next_word(std::string_view text, std::size_t& at) {
-  while (at < text.size() && is_space(text[at])) ++at;
-  const std::size_t start = at;
-  while (at < text.size() && !is_space(text[at])) ++at;
-  return text.substr(start, at - start);
-}
-
 std::string truncated(const std::string& stated, const std::string& holds) {
   return "the header states " + stated + ", more than the file holds (" + holds + "; a truncated file?)";
 }
 
-// The OFF keyword's optional prefixes, in order ([ST][C][N][4][n]OFF); false when `word` is not
-// one. `dimension` is set for nOFF, whose counts follow the vertex dimension.
-bool off_keyword(std::string_view word, bool& dimension) {
-  for (const std::string_view prefix : {"ST", "C", "N", "4"})
-    if (word.starts_with(prefix)) word.remove_prefix(prefix.size());
-  dimension = word.starts_with('n');
-  if (dimension) word.remove_prefix(1);
-  return word == "OFF";
-}
-
-// Binary OFF: the counts as three 32-bit integers after the keyword's line, then 3 floats per
-// vertex and at least a 32-bit size per face. The byte order is the reader's business, so the
-// counts must fit in either order.
-std::string binary_off_counts(std::string_view text, std::size_t body) {
-  if (text.size() < body + 12) return "binary OFF without its vertex and face counts";
-  double need = kInfinity;
-  for (const bool big_endian : {false, true}) {
-    std::uint32_t count[2] = {0, 0};
-    for (int c = 0; c < 2; ++c)
-      for (int b = 0; b < 4; ++b) {
-        const auto byte = static_cast<std::uint32_t>(static_cast<unsigned char>(text[body + 4 * c + b]));
-        count[c] |= byte << (8 * (big_endian ? 3 - b : b));
-      }
-    need = std::min(need, 12.0 * count[0] + 4.0 * count[1]);
+// Words of a text in order, across lines, with the line each starts on.
+class Words {
+ public:
+  explicit Words(std::string_view text) : text_(text) {}
+  /// The next word, or empty at the end of the text.
+  std::string_view next() {
+    while (at_ < text_.size() && is_space(text_[at_])) line_ += text_[at_++] == '\n' ? 1 : 0;
+    const std::size_t start = at_;
+    while (at_ < text_.size() && !is_space(text_[at_])) ++at_;
+    return text_.substr(start, at_ - start);
   }
-  const std::size_t have = text.size() - body - 12;
-  if (need <= static_cast<double>(have)) return {};
-  return truncated("vertex and face counts needing " + std::to_string(static_cast<std::uint64_t>(need)) + " bytes",
-                   std::to_string(have) + " bytes after them");
+  /// Skips what is left of the current line (an OFF record's colours, texture coordinates).
+  void end_line() {
+    while (at_ < text_.size() && text_[at_] != '\n') ++at_;
+  }
+  std::size_t line() const { return line_; }
+  std::size_t at() const { return at_; }
+
+ private:
+  std::string_view text_;
+  std::size_t at_ = 0, line_ = 1;
+};
+
+// Built by appending: GCC 12 warns (-Wrestrict, a false positive) on "\"" + std::string(...).
+std::string quoted(std::string_view word) {
+  std::string out(1, '"');
+  out.append(word.substr(0, 40));
+  out.push_back('"');
+  return out;
 }
 
-std::string off_counts(const std::string& text) {
-  const std::string_view first(text.data(), std::min(text.find('\n'), text.size()));
-  // Given a stream, OpenMesh's OFF reader reads the header without checking it: with no counts
-  // ("", "OFF", "4OFF2") it reserved room for whatever its variables held (3 to 14 GB), and with
-  // a first line "BINARYF" it read faces for 11 s and more.
-  std::size_t at = 0;
-  const std::string_view keyword = next_word(text, at);
-  bool dimension = false;
-  if (!off_keyword(keyword, dimension))
-    return "the first line must be an OFF keyword ([ST][C][N][4][n]OFF), not \"" +
-           std::string(first.substr(0, 40)) + "\"";
-  if (first.find("BINARY") != std::string_view::npos) return binary_off_counts(text, first.size() + 1);
-  if (dimension && next_word(text, at).empty()) return "no vertex dimension after the nOFF keyword";
-  const std::string nv_word(next_word(text, at)), nf_word(next_word(text, at));
+// A coordinate as OpenMesh's readers took it: a float, then widened.
+bool parse_coordinate(std::string_view word, double& x) {
+  if (word.starts_with('+')) word.remove_prefix(1);
+  float f = 0;
+  const auto [end, ec] = std::from_chars(word.data(), word.data() + word.size(), f);
+  x = f;
+  return ec == std::errc() && end == word.data() + word.size() && std::isfinite(f);
+}
+
+// The header: keyword ([ST][C][N]OFF) then the vertex and face counts (and the edge count, which
+// nothing reads). Sets the counts and whether vertices carry normals (three more numbers).
+std::string off_header(Words& words, std::string_view first_line, std::uint64_t& nv, std::uint64_t& nf,
+                       bool& normals) {
+  std::string_view keyword = words.next();
+  if (keyword.starts_with("ST")) keyword.remove_prefix(2);
+  if (keyword.starts_with('C')) keyword.remove_prefix(1);
+  normals = keyword.starts_with('N');
+  if (normals) keyword.remove_prefix(1);
+  if (keyword == "4OFF" || keyword == "nOFF" || keyword == "4nOFF")
+    return "vertex dimensions other than 3 (4OFF, nOFF) are not read";
+  if (keyword != "OFF")
+    return "the first line must be an OFF keyword ([ST][C][N]OFF), not " + quoted(first_line);
+  if (first_line.find("BINARY") != std::string_view::npos)
+    return "binary OFF is not read (ASCII OFF, PLY and STL are)";
+  words.end_line();
+  const std::string nv_word(words.next()), nf_word(words.next());
   if (nf_word.empty()) return "no vertex and face counts after the OFF keyword";
   for (const std::string& word : {nv_word, nf_word})
     if (word[0] == '-') return "the header states a negative count (" + word + ")";
-  std::uint64_t nv = 0, nf = 0;
   if (!parse_count(nv_word, nv) || !parse_count(nf_word, nf))
     return "the vertex and face counts are not whole numbers (" + nv_word + " " + nf_word + ")";
-  // Then the edge count (which nothing reads, so it is counted in), three numbers per vertex (one
-  // for nOFF, whose dimension may be anything) and at least one, its size, per face.
-  const std::size_t words = words_from(text, at);
-  const double per_vertex = dimension ? 1.0 : 3.0;
-  if (per_vertex * static_cast<double>(nv) + static_cast<double>(nf) <= static_cast<double>(words)) return {};
-  return truncated(std::to_string(nv) + " vertices and " + std::to_string(nf) + " faces",
-                   std::to_string(words) + " numbers after the vertex and face counts");
+  words.end_line();
+  return {};
+}
+
+std::string off_vertices(Words& words, std::uint64_t nv, bool normals, MeshRecords& out) {
+  for (std::uint64_t v = 0; v < nv; ++v) {
+    glm::dvec3 p(0.0);
+    for (int k = 0; k < (normals ? 6 : 3); ++k) {
+      const std::string_view word = words.next();
+      const std::string where = "vertex " + std::to_string(v);
+      if (word.empty()) return "the file ends in " + where + " (the header states " + std::to_string(nv) + ")";
+      double x = 0;
+      if (!parse_coordinate(word, x))
+        return where + ": " + quoted(word) + " is not a finite number (line " + std::to_string(words.line()) + ")";
+      if (k < 3) p[k] = x;
+    }
+    words.end_line();
+    out.positions.push_back(p);
+  }
+  return {};
+}
+
+std::string off_faces(Words& words, std::uint64_t nv, std::uint64_t nf, MeshRecords& out) {
+  for (std::uint64_t f = 0; f < nf; ++f) {
+    const std::string where = "face " + std::to_string(f);
+    std::uint64_t n = 0;
+    std::string_view word = words.next();
+    if (word.empty()) return "the file ends in " + where + " (the header states " + std::to_string(nf) + ")";
+    if (!parse_count(std::string(word), n))
+      return where + ": " + quoted(word) + " is not a vertex count (line " + std::to_string(words.line()) + ")";
+    std::vector<std::uint32_t>& face = out.faces.emplace_back();
+    for (std::uint64_t i = 0; i < n; ++i) {  // each index is a word of the file: n cannot run away
+      word = words.next();
+      if (word.empty()) return "the file ends in " + where + " (it states " + std::to_string(n) + " vertices)";
+      std::uint64_t index = 0;
+      if (!parse_count(std::string(word), index))
+        return where + ": " + quoted(word) + " is not a vertex index (line " + std::to_string(words.line()) + ")";
+      face.push_back(index < nv ? static_cast<std::uint32_t>(index) : kNoVertex);
+    }
+    words.end_line();  // a colour, if any
+  }
+  return {};
 }
 
 struct PlyElement {
@@ -202,9 +241,25 @@ std::string without_material_libraries(std::string text) {
 }
 
 std::string stated_counts_problem(const std::string& text, const std::string& ext) {
-  if (ext == ".off") return off_counts(text);
-  if (ext == ".ply") return ply_counts(text);
-  return {};
+  return ext == ".ply" ? ply_counts(text) : std::string();
+}
+
+std::string read_ascii_off(const std::string& text, MeshRecords& out) {
+  out = {};
+  const std::string_view first_line(text.data(), std::min(text.find('\n'), text.size()));
+  Words words(text);
+  std::uint64_t nv = 0, nf = 0;
+  bool normals = false;
+  if (std::string bad = off_header(words, first_line, nv, nf, normals); !bad.empty()) return bad;
+  // Counts the text cannot hold are refused before anything is reserved for them.
+  const std::size_t left = words_from(text, words.at());
+  if ((normals ? 6.0 : 3.0) * static_cast<double>(nv) + static_cast<double>(nf) > static_cast<double>(left))
+    return truncated(std::to_string(nv) + " vertices and " + std::to_string(nf) + " faces",
+                     std::to_string(left) + " numbers after the counts");
+  out.positions.reserve(nv);
+  out.faces.reserve(nf);
+  if (std::string bad = off_vertices(words, nv, normals, out); !bad.empty()) return bad;
+  return off_faces(words, nv, nf, out);
 }
 
 }  // namespace ht

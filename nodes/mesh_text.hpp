@@ -1,9 +1,13 @@
-// A mesh file's bytes, checked and rewritten before OpenMesh's readers see them: what those
-// readers do badly, found by the fuzzers of fuzz/ (each case is a test in
-// tests/test_mesh_reading.cpp). Used by MeshLeaf::load (nodes/mesh_leaf.cpp).
+// A mesh file's bytes checked and rewritten before OpenMesh's readers see them, or read here
+// instead of by OpenMesh (OFF): what those readers do badly, found while fuzzing (fuzz/; each
+// case is a test in tests/test_mesh_reading.cpp). Used by MeshLeaf::load (nodes/mesh_leaf.cpp).
 #pragma once
 
+#include <glm/vec3.hpp>
+
+#include <cstdint>
 #include <string>
+#include <vector>
 
 namespace ht {
 
@@ -12,14 +16,29 @@ namespace ht {
 /// geometry is read, so the library is never needed.
 std::string without_material_libraries(std::string text);
 
-/// What is wrong with the element counts a header states, or "" when they fit in the file or
-/// the format states none: an OFF header without them, a negative count, or counts the file
-/// cannot hold. OpenMesh's readers trust the counts: a 50-byte OFF file stating 30 million faces
-/// made the reader add its last face 30 million times (46 s and 9 GB before a wrong message), an
-/// ASCII PLY file stating more faces than it holds was read to its end and accepted, an OFF
-/// stream without counts made it reserve room for whatever its variables held.
-/// `ext` is ".off" (`text` as plain OFF: the keyword alone on the first line, no comments),
-/// ".ply" (ASCII or binary) or anything else (no check).
+/// What is wrong with the element counts a PLY header states, or "" when they fit in the file
+/// (or cannot be read: the reader refuses the file then) and for other formats. OpenMesh's PLY
+/// reader trusts them: a file stating more faces than it holds was read to its end and accepted,
+/// a count that is not a number took 65 s to end in bad_alloc, 2 billion records of no
+/// properties took seconds. `text` is the whole file, ASCII or binary.
 std::string stated_counts_problem(const std::string& text, const std::string& ext);
+
+/// A mesh file's records as it states them: positions, and faces as lists of indices into them
+/// (kNoVertex for an index past the vertices).
+struct MeshRecords {
+  std::vector<glm::dvec3> positions;
+  std::vector<std::vector<std::uint32_t>> faces;
+};
+inline constexpr std::uint32_t kNoVertex = ~0u;
+
+/// Reads ASCII OFF ([ST][C][N]OFF) as plain_off() leaves it (the keyword alone on its line, no
+/// comments): per vertex three coordinates (as floats, as OpenMesh read them) and, for NOFF, a
+/// normal, the rest of the line ignored; per face its size, its indices and the rest of the line
+/// ignored. Returns "" or what is wrong, with the line. OpenMesh's OFF reader is not used: given
+/// a stream it never looks at the keyword (binary OFF and COFF came out as faces of 0 vertices),
+/// reserves whatever the counts say (an empty file asked for 6 GB, "4OFF2" for 3.5 GB, 30 million
+/// faces stated in 50 bytes took 46 s and 9 GB), and repeats its last face when the text runs
+/// out ("BINARYF" kept it adding faces past 10 s). Binary OFF and 4OFF/nOFF are refused.
+std::string read_ascii_off(const std::string& text, MeshRecords& out);
 
 }  // namespace ht

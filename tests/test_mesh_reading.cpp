@@ -63,7 +63,7 @@ std::string ply_stating(const std::string& faces, const std::string& body) {
   return header + body;
 }
 
-// Counts a header states (or fails to state) were trusted: an empty OFF file or one starting
+// OpenMesh trusted the counts a header states (or fails to state): an empty OFF file or one starting
 // "4OFF2" reserved 3 to 14 GB, one starting "BINARYF" read faces for seconds; OFF stating 30 million faces
 // in 50 bytes took 46 s and 9 GB to end in a wrong message; ASCII PLY stating more faces than it
 // holds was read to its end and accepted (two triangles on one face, a solid of no volume); a
@@ -77,6 +77,9 @@ TEST(MeshReading, CountsBeyondTheFileAreRefusedAtOnce) {
   test::write_file(dir / "keyword.off", "OFF\n");
   test::write_file(dir / "4OFF2.off", "4OFF2\n");
   test::write_file(dir / "BINARYF.off", "BINARYF");
+  test::write_file(dir / "4OFF.off", "4OFF\n1 0 0\n0 0 0 1\n");
+  test::write_file(dir / "huge_face.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n4000000000 0 1 2\n");
+  test::write_file(dir / "word.off", "OFF\n3 1 0\n0 0 0\n1 x 0\n0 1 0\n3 0 1 2\n");
   test::write_file(dir / "binary.off", std::string("OFF BINARY\n\0\0\0\4\0\0\1\0\0\0\0\0", 23) + std::string(48, '\0'));
   test::write_file(dir / "faces.ply", ply_stating("30000000", "0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 1 2\n"));
   test::write_file(dir / "binary.ply",
@@ -89,14 +92,16 @@ TEST(MeshReading, CountsBeyondTheFileAreRefusedAtOnce) {
   const auto start = std::chrono::steady_clock::now();
   for (const auto& [name, expected] : std::vector<std::pair<std::string, std::string>>{
            {"faces.off", "faces.off: the header states 4 vertices and 30000000 faces, more than the file holds "
-                         "(17 numbers after the vertex and face counts; a truncated file?)"},
+                         "(16 numbers after the counts; a truncated file?)"},
            {"vertices.off", "vertices.off: the header states 1000000000 vertices and 4 faces"},
            {"negative.off", "negative.off: the header states a negative count (-1)"},
-           {"empty.off", "empty.off: the first line must be an OFF keyword ([ST][C][N][4][n]OFF), not \"\""},
-           {"BINARYF.off", "BINARYF.off: the first line must be an OFF keyword ([ST][C][N][4][n]OFF), not \"BINARYF\""},
-           {"binary.off", "binary.off: the header states vertex and face counts needing 1072 bytes, more than the "
-                          "file holds (48 bytes after them"},
-           {"4OFF2.off", "4OFF2.off: the first line must be an OFF keyword ([ST][C][N][4][n]OFF), not \"4OFF2\""},
+           {"empty.off", "empty.off: the first line must be an OFF keyword ([ST][C][N]OFF), not \"\""},
+           {"BINARYF.off", "BINARYF.off: the first line must be an OFF keyword ([ST][C][N]OFF), not \"BINARYF\""},
+           {"binary.off", "binary.off: binary OFF is not read (ASCII OFF, PLY and STL are)"},
+           {"4OFF2.off", "4OFF2.off: the first line must be an OFF keyword ([ST][C][N]OFF), not \"4OFF2\""},
+           {"4OFF.off", "4OFF.off: vertex dimensions other than 3 (4OFF, nOFF) are not read"},
+           {"huge_face.off", "huge_face.off: the file ends in face 0 (it states 4000000000 vertices)"},
+           {"word.off", "word.off: vertex 1: \"x\" is not a finite number (line 4)"},
            {"keyword.off", "keyword.off: no vertex and face counts after the OFF keyword"},
            {"faces.ply", "faces.ply: the header states 4 vertex, 30000000 face, more than the file holds (16 words"},
            {"binary.ply", "binary.ply: the header states 2000000000 vertex, more than the file holds (3 bytes"},
@@ -112,6 +117,26 @@ TEST(MeshReading, CountsBeyondTheFileAreRefusedAtOnce) {
   EXPECT_EQ(message_of(dir / "tet.ply"), "loaded");
   test::write_file(dir / "tet.off", "OFF\n4 4 6\n" + kTetraBody);
   EXPECT_EQ(message_of(dir / "tet.off"), "loaded");
+  std::filesystem::remove_all(dir);
+}
+
+// OpenMesh's OFF reader, given a stream, never read the keyword: COFF's colours and NOFF's
+// normals were taken for faces (faces of 0 vertices). OFF is now read by HybridTree itself.
+TEST(MeshReading, OffVariantsLoad) {
+  const auto dir = test::temp_dir("mesh-off-variants");
+  test::write_file(dir / "c.off", "COFF\n4 4 6\n0 0 0 255 0 0\n1 0 0 255 0 0 255\n0 1 0 1.0 0.5 0.5\n0 0 1\n"
+                                   "3 0 2 1 0 255 0\n3 0 1 3\n3 0 3 2 0.5 0.5 0.5 1.0\n3 1 2 3\n");
+  test::write_file(dir / "n.off", "NOFF\n4 4 6\n0 0 0 0 0 -1\n1 0 0 1 0 0\n0 1 0 0 1 0\n0 0 1 0 0 1\n"
+                                   "3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n");
+  test::write_file(dir / "st.off", "STOFF\n4 4 6\n0 0 0 0 0\n1 0 0 1 0\n0 1 0 0 1\n0 0 1 1 1\n" +
+                                       kTetraBody.substr(kTetraBody.find("3 0")));
+  for (const char* name : {"c.off", "n.off", "st.off"}) {
+    SCOPED_TRACE(name);
+    EXPECT_EQ(message_of(dir / name), "loaded");
+    const auto leaf = MeshLeaf::load(dir / name);
+    EXPECT_EQ(leaf->report().triangles, 4u);
+    EXPECT_EQ(leaf->positions()[3], glm::dvec3(0, 0, 1));
+  }
   std::filesystem::remove_all(dir);
 }
 
