@@ -38,6 +38,12 @@ namespace {
 constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
 constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr std::size_t kMaxHoleEdges = 64;
+// Embree works in float and asserts (aborting the process) on a ray whose origin lies past about
+// 1.8e18 (fuzz_mesh_off: a vertex at 5.5e24 put a shell's probe ray there). Meshes stay inside
+// this; points beyond it are answered without Embree.
+constexpr double kMaxCoordinate = 1e18;
+
+double largest_coordinate(const glm::dvec3& p) { return std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z)}); }
 
 [[noreturn]] void fail(const std::string& name, const std::string& what) {
   throw MeshError(name + ": " + what);
@@ -790,6 +796,9 @@ std::shared_ptr<const MeshLeaf> MeshLeaf::build(std::vector<glm::dvec3> position
   for (std::size_t v = 0; v < positions.size(); ++v)
     if (!std::isfinite(positions[v].x) || !std::isfinite(positions[v].y) || !std::isfinite(positions[v].z))
       fail(name, "vertex " + std::to_string(v) + " has a non-finite coordinate");
+  for (std::size_t v = 0; v < positions.size(); ++v)
+    if (largest_coordinate(positions[v]) > kMaxCoordinate)
+      fail(name, "vertex " + std::to_string(v) + " lies beyond 1e18 on an axis, farther than the ray queries reach");
   if (triangles.empty()) fail(name, "no triangles");
   if (positions.size() >= kNone || triangles.size() >= kNone / 3)
     fail(name, "too many vertices or triangles");
@@ -937,6 +946,7 @@ bool point_query_visit(RTCPointQueryFunctionArguments* args) {
 
 MeshLeaf::Closest MeshLeaf::query(const glm::dvec3& p, double radius) const {
   if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) return {kInf, false, p};
+  if (largest_coordinate(p) > kMaxCoordinate) return far_query(p, radius);
   const double mag = std::max({accel_->scale, std::abs(p.x), std::abs(p.y), std::abs(p.z)});
   PointQueryState st{accel_->records.data(),
                      accel_->offset.data(),
@@ -967,6 +977,24 @@ MeshLeaf::Closest MeshLeaf::query(const glm::dvec3& p, double radius) const {
                                    ? inside(p)
                                    : glm::dot(p - st.closest, accel_->pseudo_normal(st.tri, st.feature, surface_->triangles)) < 0);
   return {dist <= radius ? dist : kInf, in, st.closest};
+}
+
+// A point beyond kMaxCoordinate, where Embree cannot go: outside the mesh (which lies within
+// it), at least 0 away from it; the nearest triangle by a walk over all of them, needed only
+// when the radius reaches that far.
+MeshLeaf::Closest MeshLeaf::far_query(const glm::dvec3& p, double radius) const {
+  const glm::dvec3 out = glm::max(glm::max(bounds_.lo - p, p - bounds_.hi), glm::dvec3(0.0));
+  const double gap = std::hypot(out.x, out.y, out.z);  // no overflow, however far
+  if (!(gap <= radius)) return {kInf, false, p};
+  Closest best{kInf, false, p};
+  const auto& pos = surface_->positions;
+  for (const glm::uvec3& t : surface_->triangles) {
+    const glm::dvec3 q = closest_on_triangle(p, pos[t[0]], pos[t[1]], pos[t[2]]).point;
+    const glm::dvec3 d = p - q;
+    if (const double dist = std::hypot(d.x, d.y, d.z); dist < best.distance) best = {dist, false, q};
+  }
+  if (!(best.distance <= radius)) best.distance = kInf;
+  return best;
 }
 
 bool MeshLeaf::inside(const glm::dvec3& p) const {

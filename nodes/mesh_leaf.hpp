@@ -49,9 +49,9 @@ struct MeshReport {
 
 class MeshLeaf {
  public:
-  /// Reads OFF, OBJ, PLY or STL through OpenMesh and validates it: at least one triangle,
-  /// finite coordinates, no open or non-manifold edges (unless `repair`, which closes holes of
-  /// up to 64 boundary edges and reports it). Throws MeshError.
+  /// Reads OFF, OBJ, PLY or STL (OFF itself, the others through OpenMesh) and validates it: at
+  /// least one triangle, finite coordinates within 1e18, no open or non-manifold edges (unless
+  /// `repair`, which closes holes of up to 64 boundary edges and reports it). Throws MeshError.
   static std::shared_ptr<const MeshLeaf> load(const std::filesystem::path& file, bool repair = false);
 
   /// The same validation on triangles given in memory (tests, and the ffd node's deformed mesh).
@@ -95,6 +95,8 @@ class MeshLeaf {
   static std::shared_ptr<const MeshLeaf> build(std::vector<glm::dvec3> positions,
                                                std::vector<glm::uvec3> triangles, std::size_t input_faces,
                                                std::string name, bool repair);
+  /// query() for a point past the range Embree handles (nodes/mesh_leaf.cpp kMaxCoordinate).
+  Closest far_query(const glm::dvec3& p, double radius) const;
   struct Accel;  // Embree device, scene and pseudo-normals
   std::string name_;
   std::shared_ptr<TriangleMesh> surface_ = std::make_shared<TriangleMesh>();

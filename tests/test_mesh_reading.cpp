@@ -11,6 +11,7 @@
 #include <unistd.h>
 
 #include <chrono>
+#include <cmath>
 #include <future>
 #include <string>
 #include <utility>
@@ -136,6 +137,27 @@ TEST(MeshReading, OffVariantsLoad) {
     const auto leaf = MeshLeaf::load(dir / name);
     EXPECT_EQ(leaf->report().triangles, 4u);
     EXPECT_EQ(leaf->positions()[3], glm::dvec3(0, 0, 1));
+  }
+  std::filesystem::remove_all(dir);
+}
+
+// Embree asserts, aborting the process, on a ray from past about 1.8e18: a vertex at 5.5e24 put
+// the orientation probe there. Such meshes are refused; points that far are answered without
+// Embree.
+TEST(MeshReading, CoordinatesEmbreeCannotReachAreRefused) {
+  const auto dir = test::temp_dir("mesh-far");
+  test::write_file(dir / "far.off", "OFF\n4 4 0\n0 0 0\n5.5e24 0 0\n0 1 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n");
+  EXPECT_EQ(message_of(dir / "far.off"), (dir / "far.off").string() +
+                                             ": vertex 1 lies beyond 1e18 on an axis, farther than the ray queries reach");
+  test::write_file(dir / "tet.off", "OFF\n4 4 0\n" + kTetraBody);
+  const auto tet = MeshLeaf::load(dir / "tet.off");
+  for (const double x : {2e18, 1e30, -1e100}) {
+    const glm::dvec3 p(x, 0.25, 0.25);
+    EXPECT_FALSE(tet->inside(p));
+    EXPECT_FALSE(std::isfinite(tet->query(p, 1.0).distance));
+    const MeshLeaf::Closest all = tet->query(p, 1e308);  // the walk over triangles
+    EXPECT_NEAR(all.distance, std::abs(x) - (x > 0 ? 1.0 : 0.0), 1e-12 * std::abs(x));
+    EXPECT_FALSE(all.inside);
   }
   std::filesystem::remove_all(dir);
 }
