@@ -679,33 +679,26 @@ struct PointQueryState {
 
 namespace {
 
-// OFF is read here (nodes/mesh_text.hpp says why OpenMesh's reader is not used).
-MeshRecords off_records(const std::string& name, std::string text) {
+// OFF and OBJ are read here (nodes/mesh_text.hpp says why OpenMesh's readers are not used).
+MeshRecords text_records(const std::string& name, std::string text, const std::string& ext) {
   MeshRecords records;
-  if (const std::string bad = read_ascii_off(plain_off(std::move(text)), records); !bad.empty()) fail(name, bad);
+  const std::string bad = ext == ".off" ? read_ascii_off(plain_off(std::move(text)), records) : read_obj(text, records);
+  if (!bad.empty()) fail(name, bad);
   return records;
 }
 
-// OBJ, PLY and STL through OpenMesh, recording what the file states (RecordingImporter). OBJ is
-// read from memory, without its material libraries.
+// PLY and STL through OpenMesh, recording what the file states (RecordingImporter).
 MeshRecords openmesh_records(const std::string& name, const std::filesystem::path& file, const std::string& ext,
                              std::string text) {
-  if (ext == ".obj") text = without_material_libraries(std::move(text));
   if (const std::string bad = stated_counts_problem(text, ext); !bad.empty()) fail(name, bad);
+  text.clear();
+  text.shrink_to_fit();
   TriMesh scratch;
   RecordingImporter importer(scratch);
   {
     QuietOpenMesh quiet;
     OpenMesh::IO::Options options;
-    bool ok = false;
-    if (ext == ".obj") {
-      std::istringstream stream(std::move(text));
-      ok = OpenMesh::IO::IOManager().read(stream, ext, importer, options);
-    } else {
-      text.clear();
-      text.shrink_to_fit();
-      ok = OpenMesh::IO::IOManager().read(file.string(), importer, options);
-    }
+    const bool ok = OpenMesh::IO::IOManager().read(file.string(), importer, options);
     std::string format = ext.substr(1);
     std::transform(format.begin(), format.end(), format.begin(),
                    [](unsigned char ch) { return static_cast<char>(std::toupper(ch)); });
@@ -756,8 +749,8 @@ std::shared_ptr<const MeshLeaf> MeshLeaf::load(const std::filesystem::path& file
   }
   if (const std::string bad = non_finite_number(text, ext); !bad.empty()) fail(name, bad);
 
-  MeshRecords records =
-      ext == ".off" ? off_records(name, std::move(text)) : openmesh_records(name, file, ext, std::move(text));
+  MeshRecords records = ext == ".off" || ext == ".obj" ? text_records(name, std::move(text), ext)
+                                                      : openmesh_records(name, file, ext, std::move(text));
   std::vector<glm::uvec3> triangles;
   triangles.reserve(records.faces.size());
   for (std::size_t f = 0; f < records.faces.size(); ++f) {

@@ -224,21 +224,19 @@ std::string ply_counts(const std::string& text) {
   return truncated(stated, std::to_string(have) + (ascii ? " words" : " bytes") + " after the header");
 }
 
-}  // namespace
-
-std::string without_material_libraries(std::string text) {
-  if (text.find("mtllib") == std::string::npos) return text;
-  std::string out;
-  out.reserve(text.size());
-  for (std::size_t at = 0; at < text.size();) {
-    const std::size_t eol = text.find('\n', at);
-    const std::size_t end = eol == std::string::npos ? text.size() : eol + 1;
-    const std::size_t first = text.find_first_not_of(" \t\r\v\f", at);
-    if (!(first < end && text.compare(first, 6, "mtllib") == 0)) out.append(text, at, end - at);
-    at = end;
-  }
-  return out;
+// One OBJ face corner ("7", "-2", "7/1", "7//3"): the vertex index before any '/', 1-based or,
+// when negative, counted back from the vertices read so far. Sets kNoVertex when out of range.
+bool obj_corner(std::string_view word, std::size_t vertices, std::uint32_t& index) {
+  word = word.substr(0, word.find('/'));
+  long long k = 0;
+  const auto [end, ec] = std::from_chars(word.data(), word.data() + word.size(), k);
+  if (ec != std::errc() || end != word.data() + word.size() || k == 0) return false;
+  const long long v = k > 0 ? k - 1 : static_cast<long long>(vertices) + k;
+  index = v >= 0 && v < static_cast<long long>(kNoVertex) ? static_cast<std::uint32_t>(v) : kNoVertex;
+  return true;
 }
+
+}  // namespace
 
 std::string stated_counts_problem(const std::string& text, const std::string& ext) {
   return ext == ".ply" ? ply_counts(text) : std::string();
@@ -260,6 +258,48 @@ std::string read_ascii_off(const std::string& text, MeshRecords& out) {
   out.faces.reserve(nf);
   if (std::string bad = off_vertices(words, nv, normals, out); !bad.empty()) return bad;
   return off_faces(words, nv, nf, out);
+}
+
+}  // namespace ht
+
+namespace ht {
+
+std::string read_obj(const std::string& text, MeshRecords& out) {
+  out = {};
+  std::size_t line_no = 0;
+  for (std::size_t at = 0; at < text.size();) {
+    const std::size_t eol = std::min(text.find('\n', at), text.size());
+    std::string_view line(text.data() + at, eol - at);
+    at = eol + 1;
+    ++line_no;
+    line = line.substr(0, line.find('#'));
+    Words words(line);
+    const std::string_view keyword = words.next();
+    const std::string where = " (line " + std::to_string(line_no) + ")";
+    if (keyword == "v") {
+      glm::dvec3 p(0.0);
+      for (int k = 0; k < 3; ++k) {
+        const std::string_view word = words.next();
+        if (!parse_coordinate(word, p[k]))
+          return "vertex " + std::to_string(out.positions.size()) + ": " +
+                 (word.empty() ? std::string("needs three coordinates") : quoted(word) + " is not a finite number") + where;
+      }
+      out.positions.push_back(p);
+    } else if (keyword == "f") {
+      std::vector<std::uint32_t>& face = out.faces.emplace_back();
+      for (std::string_view word = words.next(); !word.empty(); word = words.next()) {
+        std::uint32_t index = 0;
+        if (!obj_corner(word, out.positions.size(), index))
+          return "face " + std::to_string(out.faces.size() - 1) + ": " + quoted(word) + " is not a vertex index" + where;
+        face.push_back(index);
+      }
+    }  // texture coordinates, normals, groups, materials, lines: not geometry of the solid
+  }
+  // A positive index may name a vertex listed after its face.
+  for (auto& face : out.faces)
+    for (std::uint32_t& v : face)
+      if (v != kNoVertex && v >= out.positions.size()) v = kNoVertex;
+  return {};
 }
 
 }  // namespace ht

@@ -1,6 +1,6 @@
-// A mesh file's bytes checked and rewritten before OpenMesh's readers see them, or read here
-// instead of by OpenMesh (OFF): what those readers do badly, found while fuzzing (fuzz/; each
-// case is a test in tests/test_mesh_reading.cpp). Used by MeshLeaf::load (nodes/mesh_leaf.cpp).
+// Mesh files read here instead of by OpenMesh (OFF, OBJ), and checks on PLY before OpenMesh reads
+// it: what OpenMesh's readers do badly, found while fuzzing (fuzz/; each case is a test in
+// tests/test_mesh_reading.cpp). Used by MeshLeaf::load (nodes/mesh_leaf.cpp).
 #pragma once
 
 #include <glm/vec3.hpp>
@@ -10,11 +10,6 @@
 #include <vector>
 
 namespace ht {
-
-/// OBJ text without its "mtllib" lines. OpenMesh's OBJ reader opens the material library a file
-/// names wherever the path leads ("../../dev/zero" never ends, a FIFO blocks forever); only the
-/// geometry is read, so the library is never needed.
-std::string without_material_libraries(std::string text);
 
 /// What is wrong with the element counts a PLY header states, or "" when they fit in the file
 /// (or cannot be read: the reader refuses the file then) and for other formats. OpenMesh's PLY
@@ -40,5 +35,14 @@ inline constexpr std::uint32_t kNoVertex = ~0u;
 /// faces stated in 50 bytes took 46 s and 9 GB), and repeats its last face when the text runs
 /// out ("BINARYF" kept it adding faces past 10 s). Binary OFF and 4OFF/nOFF are refused.
 std::string read_ascii_off(const std::string& text, MeshRecords& out);
+
+/// Reads OBJ geometry: "v x y z" (further numbers ignored) and "f" with 1-based or negative
+/// (relative) indices, each corner's texture and normal indices ignored; every other statement
+/// (vt, vn, groups, materials, lines) is skipped. Returns "" or what is wrong, with the line.
+/// OpenMesh's OBJ reader is not used: it opened the material library a file names wherever the
+/// path led ("mtllib ../../dev/zero" never returned, a FIFO blocked), asserted (aborting the
+/// process) on a face corner with no vertex index ("f /1/8"), and dropped faces of fewer than
+/// three corners silently.
+std::string read_obj(const std::string& text, MeshRecords& out);
 
 }  // namespace ht

@@ -141,6 +141,36 @@ TEST(MeshReading, OffVariantsLoad) {
   std::filesystem::remove_all(dir);
 }
 
+// OpenMesh's OBJ reader asserted, aborting the process, on a corner with no vertex index, and
+// dropped faces of fewer than three corners without a word. OBJ is now read by HybridTree.
+TEST(MeshReading, ObjFacesAreReadOrRefusedByName) {
+  const auto dir = test::temp_dir("mesh-obj");
+  const std::string v = "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 0 0 1\n";
+  test::write_file(dir / "corner.obj", v + "f /1/8 2 3\n");
+  test::write_file(dir / "short.obj", v + "f 1 3 2\nf 1 2\n");
+  test::write_file(dir / "word.obj", v + "f 1 3 x\n");
+  test::write_file(dir / "vertex.obj", "v 0 0\n");
+  test::write_file(dir / "range.obj", v + "f 1 3 9\n");
+  for (const auto& [name, expected] : std::vector<std::pair<std::string, std::string>>{
+           {"corner.obj", "corner.obj: face 0: \"/1/8\" is not a vertex index (line 5)"},
+           {"short.obj", "short.obj: face 1 has only 2 vertices"},
+           {"word.obj", "word.obj: face 0: \"x\" is not a vertex index (line 5)"},
+           {"vertex.obj", "vertex.obj: vertex 0: needs three coordinates (line 1)"},
+           {"range.obj", "range.obj: face 0 has an out-of-range vertex index"}}) {
+    const std::string m = message_of(dir / name);
+    EXPECT_NE(m.find(expected), std::string::npos) << m;
+  }
+  // Corners with texture and normal indices, negative (relative) indices, a face naming vertices
+  // listed after it, and statements that are not geometry.
+  test::write_file(dir / "tet.obj", "o t\nf 1/1/1 3//1 2/2\n" + v +
+                                        "vt 0 0\nvn 0 0 1\ng side\nusemtl x\ns 1\nl 1 2\n"
+                                        "f -4 -3 -1\nf 1 4 3 # comment\nf 2 3 4\n");
+  const auto tet = MeshLeaf::load(dir / "tet.obj");
+  EXPECT_EQ(tet->report().triangles, 4u);
+  EXPECT_EQ(tet->positions()[3], glm::dvec3(0, 0, 1));
+  std::filesystem::remove_all(dir);
+}
+
 // Embree asserts, aborting the process, on a ray from past about 1.8e18: a vertex at 5.5e24 put
 // the orientation probe there. Such meshes are refused; points that far are answered without
 // Embree.
