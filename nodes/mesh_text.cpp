@@ -175,40 +175,60 @@ std::size_t ply_type_bytes(const std::string& type) {
   return 0;
 }
 
+// The header, checked line by line: OpenMesh's header parser crashed on a property before any
+// element (fuzz_mesh_ply), and took a count it could not read as whatever it parsed (65 s, then
+// bad_alloc, for "element face FACES"). Sets the elements, the format and where the data starts.
+std::string ply_header(const std::string& text, std::vector<PlyElement>& elements, bool& ascii, std::size_t& at) {
+  for (std::size_t line_no = 1;; ++line_no) {
+    const std::size_t eol = text.find('\n', at);
+    if (eol == std::string::npos) return "the header does not end (no end_header line)";
+    Words line(std::string_view(text).substr(at, eol - at));
+    at = eol + 1;
+    const std::string where = " (header line " + std::to_string(line_no) + ")";
+    const std::string_view word = line.next();
+    if (line_no == 1) {
+      if (word != "ply" || !line.next().empty()) return "the first line must be \"ply\"";
+    } else if (word == "end_header") {
+      return {};
+    } else if (word == "format") {
+      const std::string_view format = line.next();
+      if (format != "ascii" && format != "binary_little_endian" && format != "binary_big_endian")
+        return "unknown format " + quoted(format) + where;
+      ascii = format == "ascii";
+    } else if (word == "element") {
+      PlyElement& e = elements.emplace_back();
+      e.name = line.next();
+      const std::string count(line.next());
+      if (count.empty()) return "an element without a name or count" + where;
+      if (count[0] == '-') return "the header states a negative count (element " + e.name + " " + count + ")";
+      if (!parse_count(count, e.count))
+        return "the header's count of element \"" + e.name + "\" is not a whole number (" + count + ")";
+    } else if (word == "property") {
+      if (elements.empty()) return "a property before any element" + where;
+      std::string_view type = line.next();
+      std::size_t bytes = 0;
+      if (type == "list") {
+        bytes = ply_type_bytes(std::string(line.next()));  // the count: an empty list is that alone
+        if (bytes == 0) return "a list property without a valid count type" + where;
+        type = line.next();  // the items' type
+      } else {
+        bytes = ply_type_bytes(std::string(type));
+      }
+      if (ply_type_bytes(std::string(type)) == 0 || line.next().empty())
+        return "a property without a valid type or name" + where;
+      ++elements.back().properties;
+      elements.back().bytes += bytes;
+    } else if (word != "comment" && word != "obj_info" && !word.empty()) {
+      return "unknown header line " + quoted(word) + where;
+    }
+  }
+}
+
 std::string ply_counts(const std::string& text) {
   std::vector<PlyElement> elements;
   bool ascii = false;
   std::size_t at = 0;
-  while (true) {  // header lines up to end_header
-    const std::size_t eol = text.find('\n', at);
-    if (eol == std::string::npos) return {};
-    std::istringstream line(text.substr(at, eol - at));
-    at = eol + 1;
-    std::string word;
-    if (!(line >> word)) continue;
-    if (word == "end_header") break;
-    if (word == "format") {
-      line >> word;
-      ascii = word == "ascii";
-    } else if (word == "element") {
-      PlyElement e;
-      // OpenMesh's reader took a count it could not read as whatever it parsed (65 s, then
-      // bad_alloc, for "element face FACES").
-      if (!(line >> e.name >> word)) return "an element line of the header has no name or count";
-      if (word[0] == '-') return "the header states a negative count (element " + e.name + " " + word + ")";
-      if (!parse_count(word, e.count))
-        return "the header's count of element \"" + e.name + "\" is not a whole number (" + word + ")";
-      elements.push_back(e);
-    } else if (word == "property" && !elements.empty()) {
-      std::string type;
-      line >> type;
-      if (type == "list") line >> type;  // the count's type: an empty list is that alone
-      const std::size_t bytes = ply_type_bytes(type);
-      if (bytes == 0) return {};
-      ++elements.back().properties;
-      elements.back().bytes += bytes;
-    }
-  }
+  if (std::string bad = ply_header(text, elements, ascii, at); !bad.empty()) return bad;
   double need = 0;
   std::string stated;
   for (const PlyElement& e : elements) {

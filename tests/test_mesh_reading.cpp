@@ -90,6 +90,11 @@ TEST(MeshReading, CountsBeyondTheFileAreRefusedAtOnce) {
   test::write_file(dir / "nothing.ply", "ply\nformat ascii 1.0\nelement junk 2000000000\n" +
                                             tet_ply.substr(tet_ply.find("element vertex")));
   test::write_file(dir / "word.ply", kPlyHeader + kTetraBody);
+  // OpenMesh's header parser crashed (SIGSEGV) on a property before any element.
+  test::write_file(dir / "property.ply", "ply\nformat binary_little_endian 1.0\nproperty float y\nend_header\n");
+  test::write_file(dir / "type.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty real x\nend_header\n0\n");
+  test::write_file(dir / "open.ply", "ply\nformat ascii 1.0\nelement vertex 1\n");
+  test::write_file(dir / "unknown.ply", "ply\nformat ascii 1.0\nelementloat x\nend_header\n");
   const auto start = std::chrono::steady_clock::now();
   for (const auto& [name, expected] : std::vector<std::pair<std::string, std::string>>{
            {"faces.off", "faces.off: the header states 4 vertices and 30000000 faces, more than the file holds "
@@ -107,7 +112,11 @@ TEST(MeshReading, CountsBeyondTheFileAreRefusedAtOnce) {
            {"faces.ply", "faces.ply: the header states 4 vertex, 30000000 face, more than the file holds (16 words"},
            {"binary.ply", "binary.ply: the header states 2000000000 vertex, more than the file holds (3 bytes"},
            {"nothing.ply", "nothing.ply: element \"junk\" states 2000000000 records but no properties"},
-           {"word.ply", "word.ply: the header's count of element \"face\" is not a whole number (FACES)"}}) {
+           {"word.ply", "word.ply: the header's count of element \"face\" is not a whole number (FACES)"},
+           {"property.ply", "property.ply: a property before any element (header line 3)"},
+           {"type.ply", "type.ply: a property without a valid type or name (header line 4)"},
+           {"open.ply", "open.ply: the header does not end (no end_header line)"},
+           {"unknown.ply", "unknown.ply: unknown header line \"elementloat\" (header line 3)"}}) {
     const std::string m = message_of(dir / name);
     EXPECT_NE(m.find(expected), std::string::npos) << m;
   }
