@@ -176,7 +176,7 @@ std::size_t ply_type_bytes(const std::string& type) {
 }
 
 // The header, checked line by line: OpenMesh's header parser crashed on a property before any
-// element (fuzz_mesh_ply), and took a count it could not read as whatever it parsed (65 s, then
+// element and looped on an unreadable version (fuzz_mesh_ply), and took a count it could not read as whatever it parsed (65 s, then
 // bad_alloc, for "element face FACES"). Sets the elements, the format and where the data starts.
 std::string ply_header(const std::string& text, std::vector<PlyElement>& elements, bool& ascii, std::size_t& at) {
   for (std::size_t line_no = 1;; ++line_no) {
@@ -194,6 +194,9 @@ std::string ply_header(const std::string& text, std::vector<PlyElement>& element
       const std::string_view format = line.next();
       if (format != "ascii" && format != "binary_little_endian" && format != "binary_big_endian")
         return "unknown format " + quoted(format) + where;
+      // OpenMesh's parser loops forever on a version it cannot read (fuzz_mesh_ply: "@0.").
+      if (const std::string_view version = line.next(); version != "1.0")
+        return "unknown PLY version " + quoted(version) + " (1.0 is the only one)" + where;
       ascii = format == "ascii";
     } else if (word == "element") {
       PlyElement& e = elements.emplace_back();

@@ -94,6 +94,8 @@ TEST(MeshReading, CountsBeyondTheFileAreRefusedAtOnce) {
   test::write_file(dir / "property.ply", "ply\nformat binary_little_endian 1.0\nproperty float y\nend_header\n");
   test::write_file(dir / "type.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty real x\nend_header\n0\n");
   test::write_file(dir / "open.ply", "ply\nformat ascii 1.0\nelement vertex 1\n");
+  // ... and looped forever on a version it could not read.
+  test::write_file(dir / "version.ply", "ply\nformat binary_big_endian @0.\nelement vertex 0\nend_header\n");
   test::write_file(dir / "unknown.ply", "ply\nformat ascii 1.0\nelementloat x\nend_header\n");
   const auto start = std::chrono::steady_clock::now();
   for (const auto& [name, expected] : std::vector<std::pair<std::string, std::string>>{
@@ -116,6 +118,7 @@ TEST(MeshReading, CountsBeyondTheFileAreRefusedAtOnce) {
            {"property.ply", "property.ply: a property before any element (header line 3)"},
            {"type.ply", "type.ply: a property without a valid type or name (header line 4)"},
            {"open.ply", "open.ply: the header does not end (no end_header line)"},
+           {"version.ply", "version.ply: unknown PLY version \"@0.\" (1.0 is the only one) (header line 2)"},
            {"unknown.ply", "unknown.ply: unknown header line \"elementloat\" (header line 3)"}}) {
     const std::string m = message_of(dir / name);
     EXPECT_NE(m.find(expected), std::string::npos) << m;
