@@ -62,8 +62,11 @@ class Words {
     while (at_ < text_.size() && is_space(text_[at_])) line_ += text_[at_++] == '\n' ? 1 : 0;
     const std::size_t start = at_;
     while (at_ < text_.size() && !is_space(text_[at_])) ++at_;
+    if (at_ > start) ++read_;
     return text_.substr(start, at_ - start);
   }
+  /// Words returned so far.
+  std::size_t read() const { return read_; }
   /// Skips what is left of the current line (an OFF record's colours, texture coordinates).
   void end_line() {
     while (at_ < text_.size() && text_[at_] != '\n') ++at_;
@@ -73,7 +76,7 @@ class Words {
 
  private:
   std::string_view text_;
-  std::size_t at_ = 0, line_ = 1;
+  std::size_t at_ = 0, line_ = 1, read_ = 0;
 };
 
 // Built by appending: GCC 12 warns (-Wrestrict, a false positive) on "\"" + std::string(...).
@@ -159,12 +162,22 @@ std::string off_faces(Words& words, std::uint64_t nv, std::uint64_t nf, MeshReco
   return {};
 }
 
+struct PlyProperty {
+  bool list = false;
+  std::size_t count_bytes = 0;  // a list's size: its type's bytes (1, 2 or 4), and whether signed
+  bool count_signed = false;
+  std::size_t bytes = 0;  // a scalar's, or each list item's
+};
+
 struct PlyElement {
   std::string name;
   std::uint64_t count = 0;
-  std::size_t properties = 0;  // each at least one ASCII word
-  std::size_t bytes = 0;       // least binary bytes of one record
+  std::vector<PlyProperty> properties;
 };
+
+bool ply_type_signed(const std::string& type) {
+  return type == "char" || type == "short" || type == "int" || type == "int8" || type == "int16" || type == "int32";
+}
 
 std::size_t ply_type_bytes(const std::string& type) {
   if (type == "char" || type == "uchar" || type == "int8" || type == "uint8") return 1;
@@ -178,7 +191,8 @@ std::size_t ply_type_bytes(const std::string& type) {
 // The header, checked line by line: OpenMesh's header parser crashed on a property before any
 // element and looped on an unreadable version (fuzz_mesh_ply), and took a count it could not read as whatever it parsed (65 s, then
 // bad_alloc, for "element face FACES"). Sets the elements, the format and where the data starts.
-std::string ply_header(const std::string& text, std::vector<PlyElement>& elements, bool& ascii, std::size_t& at) {
+std::string ply_header(const std::string& text, std::vector<PlyElement>& elements, bool& ascii, bool& big_endian,
+                       std::size_t& at) {
   for (std::size_t line_no = 1;; ++line_no) {
     const std::size_t eol = text.find('\n', at);
     if (eol == std::string::npos) return "the header does not end (no end_header line)";
@@ -198,6 +212,7 @@ std::string ply_header(const std::string& text, std::vector<PlyElement>& element
       if (const std::string_view version = line.next(); version != "1.0")
         return "unknown PLY version " + quoted(version) + " (1.0 is the only one)" + where;
       ascii = format == "ascii";
+      big_endian = format == "binary_big_endian";
     } else if (word == "element") {
       PlyElement& e = elements.emplace_back();
       e.name = line.next();
@@ -208,43 +223,90 @@ std::string ply_header(const std::string& text, std::vector<PlyElement>& element
         return "the header's count of element \"" + e.name + "\" is not a whole number (" + count + ")";
     } else if (word == "property") {
       if (elements.empty()) return "a property before any element" + where;
-      std::string_view type = line.next();
-      std::size_t bytes = 0;
+      std::string type(line.next());
+      PlyProperty& prop = elements.back().properties.emplace_back();
       if (type == "list") {
-        bytes = ply_type_bytes(std::string(line.next()));  // the count: an empty list is that alone
-        if (bytes == 0) return "a list property without a valid count type" + where;
+        prop.list = true;
+        type = line.next();
+        prop.count_bytes = ply_type_bytes(type);
+        prop.count_signed = ply_type_signed(type);
+        if (prop.count_bytes == 0 || prop.count_bytes == 8 || type.starts_with("float"))
+          return "a list property without a valid count type" + where;
         type = line.next();  // the items' type
-      } else {
-        bytes = ply_type_bytes(std::string(type));
       }
-      if (ply_type_bytes(std::string(type)) == 0 || line.next().empty())
-        return "a property without a valid type or name" + where;
-      ++elements.back().properties;
-      elements.back().bytes += bytes;
+      prop.bytes = ply_type_bytes(type);
+      if (prop.bytes == 0 || line.next().empty()) return "a property without a valid type or name" + where;
     } else if (word != "comment" && word != "obj_info" && !word.empty()) {
       return "unknown header line " + quoted(word) + where;
     }
   }
 }
 
+std::string record_text(const PlyElement& e, std::uint64_t r) {
+  return "element \"" + e.name + "\" record " + std::to_string(r);
+}
+
+std::string list_too_long(const PlyElement& e, std::uint64_t r, const std::string& size) {
+  return record_text(e, r) + ": a list of " + size + " items, more than the file holds";
+}
+
+// Every record of an ASCII body, word by word: a list's size must be a whole number its items
+// fit behind. Each record takes at least a word, so this ends within the file.
+std::string ply_ascii_records(std::string_view body, const std::vector<PlyElement>& elements) {
+  Words words(body);
+  const std::size_t total = words_from(body, 0);
+  for (const PlyElement& e : elements)
+    for (std::uint64_t r = 0; r < e.count; ++r)
+      for (const PlyProperty& prop : e.properties) {
+        const std::string_view word = words.next();
+        if (word.empty()) return "the file ends in " + record_text(e, r) + " (the header states " + std::to_string(e.count) + ")";
+        if (!prop.list) continue;
+        std::uint64_t n = 0;
+        if (!parse_count(std::string(word), n))
+          return record_text(e, r) + ": the list size " + quoted(word) + " is not a whole number";
+        if (n > total - words.read()) return list_too_long(e, r, std::string(word));
+        for (std::uint64_t i = 0; i < n; ++i) words.next();
+      }
+  return {};
+}
+
+// Every record of a binary body, byte by byte, reading list sizes in the file's byte order.
+std::string ply_binary_records(std::string_view body, const std::vector<PlyElement>& elements, bool big_endian) {
+  std::size_t at = 0;
+  for (const PlyElement& e : elements)
+    for (std::uint64_t r = 0; r < e.count; ++r)
+      for (const PlyProperty& prop : e.properties) {
+        const std::size_t head = prop.list ? prop.count_bytes : prop.bytes;
+        if (body.size() - at < head)
+          return "the file ends in " + record_text(e, r) + " (the header states " + std::to_string(e.count) + ")";
+        if (!prop.list) {
+          at += head;
+          continue;
+        }
+        std::uint64_t n = 0;
+        for (std::size_t b = 0; b < head; ++b)
+          n |= std::uint64_t{static_cast<unsigned char>(body[at + b])} << (8 * (big_endian ? head - 1 - b : b));
+        if (prop.count_signed && (n >> (8 * head - 1)) != 0) return record_text(e, r) + ": a list of negative size";
+        at += head;
+        if (static_cast<double>(n) * static_cast<double>(prop.bytes) > static_cast<double>(body.size() - at))
+          return list_too_long(e, r, std::to_string(n));
+        at += n * prop.bytes;
+      }
+  return {};
+}
+
 std::string ply_counts(const std::string& text) {
   std::vector<PlyElement> elements;
-  bool ascii = false;
+  bool ascii = false, big_endian = false;
   std::size_t at = 0;
-  if (std::string bad = ply_header(text, elements, ascii, at); !bad.empty()) return bad;
-  double need = 0;
-  std::string stated;
-  for (const PlyElement& e : elements) {
-    // Records of nothing cost the reader a loop each and say nothing: 2 billion of them took it
-    // seconds.
-    if (e.count > 0 && e.properties == 0)
+  if (std::string bad = ply_header(text, elements, ascii, big_endian, at); !bad.empty()) return bad;
+  // Records of nothing cost the reader a loop each and say nothing: 2 billion of them took it
+  // seconds.
+  for (const PlyElement& e : elements)
+    if (e.count > 0 && e.properties.empty())
       return "element \"" + e.name + "\" states " + std::to_string(e.count) + " records but no properties";
-    need += static_cast<double>(e.count) * static_cast<double>(ascii ? e.properties : e.bytes);
-    stated += (stated.empty() ? "" : ", ") + std::to_string(e.count) + " " + e.name;
-  }
-  const std::size_t have = ascii ? words_from(text, at) : text.size() - at;
-  if (need <= static_cast<double>(have)) return {};
-  return truncated(stated, std::to_string(have) + (ascii ? " words" : " bytes") + " after the header");
+  const std::string_view body = std::string_view(text).substr(at);
+  return ascii ? ply_ascii_records(body, elements) : ply_binary_records(body, elements, big_endian);
 }
 
 // One OBJ face corner ("7", "-2", "7/1", "7//3"): the vertex index before any '/', 1-based or,

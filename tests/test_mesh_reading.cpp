@@ -90,6 +90,8 @@ TEST(MeshReading, CountsBeyondTheFileAreRefusedAtOnce) {
   test::write_file(dir / "nothing.ply", "ply\nformat ascii 1.0\nelement junk 2000000000\n" +
                                             tet_ply.substr(tet_ply.find("element vertex")));
   test::write_file(dir / "word.ply", kPlyHeader + kTetraBody);
+  // A list size past its items made OpenMesh's reader push indices until memory ran out.
+  test::write_file(dir / "list.ply", ply_stating("4", "0 0 0\n1 0 0\n0 1 0\n0 0 1\n88888888888888888888 0 2 1\n"));
   // OpenMesh's header parser crashed (SIGSEGV) on a property before any element.
   test::write_file(dir / "property.ply", "ply\nformat binary_little_endian 1.0\nproperty float y\nend_header\n");
   test::write_file(dir / "type.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty real x\nend_header\n0\n");
@@ -111,8 +113,9 @@ TEST(MeshReading, CountsBeyondTheFileAreRefusedAtOnce) {
            {"huge_face.off", "huge_face.off: the file ends in face 0 (it states 4000000000 vertices)"},
            {"word.off", "word.off: vertex 1: \"x\" is not a finite number (line 4)"},
            {"keyword.off", "keyword.off: no vertex and face counts after the OFF keyword"},
-           {"faces.ply", "faces.ply: the header states 4 vertex, 30000000 face, more than the file holds (16 words"},
-           {"binary.ply", "binary.ply: the header states 2000000000 vertex, more than the file holds (3 bytes"},
+           {"faces.ply", "faces.ply: the file ends in element \"face\" record 1 (the header states 30000000)"},
+           {"binary.ply", "binary.ply: the file ends in element \"vertex\" record 0 (the header states 2000000000)"},
+           {"list.ply", "list.ply: element \"face\" record 0: a list of 88888888888888888888 items, more than the file holds"},
            {"nothing.ply", "nothing.ply: element \"junk\" states 2000000000 records but no properties"},
            {"word.ply", "word.ply: the header's count of element \"face\" is not a whole number (FACES)"},
            {"property.ply", "property.ply: a property before any element (header line 3)"},
