@@ -11,11 +11,13 @@
 
 namespace ht {
 
-/// What is wrong with the element counts a PLY header states, or "" when they fit in the file
-/// (or cannot be read: the reader refuses the file then) and for other formats. OpenMesh's PLY
-/// reader trusts them: a file stating more faces than it holds was read to its end and accepted,
-/// a count that is not a number took 65 s to end in bad_alloc, 2 billion records of no
-/// properties took seconds. `text` is the whole file, ASCII or binary.
+/// What is wrong with a PLY file's structure, or "" when it is sound (and for other formats):
+/// the header checked line by line, then every record walked (ASCII word by word, binary byte by
+/// byte), so each count and list size is known to fit in the file before OpenMesh reads it.
+/// OpenMesh's PLY reader trusts the file: its header parser crashed on a property before any
+/// element and looped on an unreadable version, a file stating more faces than it holds was read
+/// to its end and accepted, a count that is not a number took 65 s to end in bad_alloc, a list
+/// size past its items pushed indices until memory ran out. `text` is the whole file.
 std::string stated_counts_problem(const std::string& text, const std::string& ext);
 
 /// A mesh file's records as it states them: positions, and faces as lists of indices into them
