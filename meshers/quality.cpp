@@ -397,7 +397,7 @@ class Improver {
       ring_of(VH(int(ring[i])), unused);
     });
     tbb::parallel_for(std::size_t(0), who.size(), [&](std::size_t i) {
-      const VH v(int(who[i]));
+      const VH v(static_cast<int>(who[i]));  // not VH v(int(x)): clang reads that as a function
       glm::dvec3 c;
       if (!ring_of(v, c)) return;
       const glm::dvec3 n = normal[who[i]], at = p(v);

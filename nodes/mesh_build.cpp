@@ -363,6 +363,9 @@ std::shared_ptr<const MeshLeaf> MeshLeaf::build(std::vector<glm::dvec3> position
   for (std::size_t v = 0; v < positions.size(); ++v)
     if (!std::isfinite(positions[v].x) || !std::isfinite(positions[v].y) || !std::isfinite(positions[v].z))
       fail(name, "vertex " + std::to_string(v) + " has a non-finite coordinate");
+  for (std::size_t v = 0; v < positions.size(); ++v)
+    if (largest_coordinate(positions[v]) > kMaxCoordinate)
+      fail(name, "vertex " + std::to_string(v) + " lies beyond 1e18 on an axis, farther than the ray queries reach");
   if (triangles.empty()) fail(name, "no triangles");
   if (positions.size() >= kNone || triangles.size() >= kNone / 3)
     fail(name, "too many vertices or triangles");

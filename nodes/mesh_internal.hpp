@@ -8,6 +8,7 @@
 
 #include <embree3/rtcore.h>
 
+#include <algorithm>
 #include <array>
 #include <cmath>
 #include <cstdint>
@@ -21,6 +22,12 @@ namespace ht::mesh_detail {
 constexpr std::uint32_t kNone = std::numeric_limits<std::uint32_t>::max();
 constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr std::size_t kMaxHoleEdges = 64;
+// Embree works in float and asserts (aborting the process) on a ray whose origin lies past about
+// 1.8e18 (fuzz_mesh_off: a vertex at 5.5e24 put a shell's probe ray there). Meshes stay inside
+// this; points beyond it are answered without Embree.
+constexpr double kMaxCoordinate = 1e18;
+
+inline double largest_coordinate(const glm::dvec3& p) { return std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z)}); }
 
 [[noreturn]] inline void fail(const std::string& name, const std::string& what) {
   throw MeshError(name + ": " + what);

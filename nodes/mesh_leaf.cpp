@@ -253,6 +253,7 @@ bool point_query_visit(RTCPointQueryFunctionArguments* args) {
 
 MeshLeaf::Closest MeshLeaf::query(const glm::dvec3& p, double radius) const {
   if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) return {kInf, false, p};
+  if (largest_coordinate(p) > kMaxCoordinate) return far_query(p, radius);
   const double mag = std::max({accel_->scale, std::abs(p.x), std::abs(p.y), std::abs(p.z)});
   PointQueryState st{accel_->records.data(),
                      accel_->offset.data(),
@@ -291,6 +292,24 @@ MeshLeaf::Closest MeshLeaf::query(const glm::dvec3& p, double radius) const {
   return {dist <= radius ? dist : kInf, in, st.closest,
           accel_->unit_normal(accel_->pseudo_normal(st.tri, snapped, tris), st.tri,
                               accel_->needs_parity(st.tri, snapped, st.closest, pos, tris), tris)};
+}
+
+// A point beyond kMaxCoordinate, where Embree cannot go: outside the mesh (which lies within
+// it), at least 0 away from it; the nearest triangle by a walk over all of them, needed only
+// when the radius reaches that far.
+MeshLeaf::Closest MeshLeaf::far_query(const glm::dvec3& p, double radius) const {
+  const glm::dvec3 out = glm::max(glm::max(bounds_.lo - p, p - bounds_.hi), glm::dvec3(0.0));
+  const double gap = std::hypot(out.x, out.y, out.z);  // no overflow, however far
+  if (!(gap <= radius)) return {kInf, false, p};
+  Closest best{kInf, false, p};
+  const auto& pos = surface_->positions;
+  for (const glm::uvec3& t : surface_->triangles) {
+    const glm::dvec3 q = closest_on_triangle(p, pos[t[0]], pos[t[1]], pos[t[2]]).point;
+    const glm::dvec3 d = p - q;
+    if (const double dist = std::hypot(d.x, d.y, d.z); dist < best.distance) best = {dist, false, q};
+  }
+  if (!(best.distance <= radius)) best.distance = kInf;
+  return best;
 }
 
 bool MeshLeaf::inside(const glm::dvec3& p) const {

@@ -62,8 +62,9 @@ struct MeshReport {
 
 class MeshLeaf {
  public:
-  /// Reads OFF, OBJ, PLY or STL through OpenMesh and validates it: at least one triangle,
-  /// finite coordinates, valid indices; for MeshInside::Closed also no open or non-manifold
+  /// Reads OFF, OBJ, PLY or STL (OFF and OBJ itself, PLY and STL through OpenMesh after checking
+  /// their headers and records) and validates it: at least one triangle, finite coordinates
+  /// within 1e18, valid indices; for MeshInside::Closed also no open or non-manifold
   /// edges (unless `repair`, which closes holes of up to 64 boundary edges and reports it) and
   /// no crossing shells. MeshInside::Winding takes the triangles as they are (each shell made
   /// consistent with its majority orientation) and reports the defects; `repair` must be false
@@ -138,6 +139,8 @@ class MeshLeaf {
   /// does (then every point is queried).
   bool shared_far_block(const float* xs, const float* ys, const float* zs, std::size_t n, float radius,
                         float* distance, std::uint8_t* inside) const;
+  /// query() for a point past the range Embree handles (nodes/mesh_internal.hpp kMaxCoordinate).
+  Closest far_query(const glm::dvec3& p, double radius) const;
   struct Accel;  // Embree device, scene and pseudo-normals
   std::string name_;
   std::shared_ptr<TriangleMesh> surface_ = std::make_shared<TriangleMesh>();

@@ -2,6 +2,7 @@
 // readers skip (non-finite numbers, faces as the file states them), the OpenMesh form of a
 // loaded mesh, and the cache that loads each file once. Validation is in nodes/mesh_build.cpp.
 #include "nodes/mesh_internal.hpp"
+#include "nodes/mesh_text.hpp"
 #include "nodes/openmesh_io.hpp"
 #include "nodes/trimesh.hpp"
 
@@ -215,6 +216,56 @@ std::string plain_off(std::string text) {
   return out;
 }
 
+// OFF and OBJ are read here (nodes/mesh_text.hpp says why OpenMesh's readers are not used).
+MeshRecords text_records(const std::string& name, std::string text, const std::string& ext) {
+  MeshRecords records;
+  const std::string bad = ext == ".off" ? read_ascii_off(plain_off(std::move(text)), records) : read_obj(text, records);
+  if (!bad.empty()) fail(name, bad);
+  return records;
+}
+
+// PLY and STL through OpenMesh, recording what the file states (RecordingImporter).
+MeshRecords openmesh_records(const std::string& name, const std::filesystem::path& file, const std::string& ext,
+                             std::string text) {
+  if (const std::string bad = stated_counts_problem(text, ext); !bad.empty()) fail(name, bad);
+  text.clear();
+  text.shrink_to_fit();
+  TriMesh scratch;
+  RecordingImporter importer(scratch);
+  {
+    QuietOpenMesh quiet;
+    OpenMesh::IO::Options options;
+    const bool ok = OpenMesh::IO::IOManager().read(file.string(), importer, options);
+    std::string format = ext.substr(1);
+    std::transform(format.begin(), format.end(), format.begin(),
+                   [](unsigned char ch) { return static_cast<char>(std::toupper(ch)); });
+    if (!ok) fail(name, "cannot read it as " + format + " (unreadable or malformed)");
+  }
+  MeshRecords records;
+  records.positions.resize(importer.vertices.size());
+  for (std::size_t v = 0; v < records.positions.size(); ++v) {
+    const auto& q = scratch.point(importer.vertices[v]);
+    records.positions[v] = glm::dvec3(q[0], q[1], q[2]);
+  }
+  records.faces = std::move(importer.faces);
+  return records;
+}
+
+// A vertex a face names twice, or kNone. Large faces are sorted, so a polygon of thousands of
+// vertices costs no quadratic search (30000 vertices would take seconds).
+std::uint32_t repeated_vertex(const std::vector<std::uint32_t>& face) {
+  if (face.size() <= 16) {
+    for (std::size_t i = 1; i < face.size(); ++i)
+      for (std::size_t j = 0; j < i; ++j)
+        if (face[i] == face[j]) return face[i];
+    return kNone;
+  }
+  std::vector<std::uint32_t> sorted = face;
+  std::sort(sorted.begin(), sorted.end());
+  const auto twice = std::adjacent_find(sorted.begin(), sorted.end());
+  return twice == sorted.end() ? kNone : *twice;
+}
+
 }  // namespace
 
 std::shared_ptr<const MeshLeaf> MeshLeaf::load(const std::filesystem::path& file, bool repair, MeshInside inside) {
@@ -235,45 +286,21 @@ std::shared_ptr<const MeshLeaf> MeshLeaf::load(const std::filesystem::path& file
   }
   if (const std::string bad = non_finite_number(text, ext); !bad.empty()) fail(name, bad);
 
-  TriMesh scratch;
-  RecordingImporter importer(scratch);
-  {
-    QuietOpenMesh quiet;
-    OpenMesh::IO::Options options;
-    bool ok = false;
-    if (ext == ".off") {  // from memory: the text may have been rewritten
-      std::istringstream stream(plain_off(std::move(text)));
-      ok = OpenMesh::IO::IOManager().read(stream, ext, importer, options);
-    } else {
-      text.clear();
-      text.shrink_to_fit();
-      ok = OpenMesh::IO::IOManager().read(file.string(), importer, options);
-    }
-    std::string format = ext.substr(1);
-    std::transform(format.begin(), format.end(), format.begin(),
-                   [](unsigned char ch) { return static_cast<char>(std::toupper(ch)); });
-    if (!ok) fail(name, "cannot read it as " + format + " (unreadable or malformed)");
-  }
-
-  std::vector<glm::dvec3> positions(importer.vertices.size());
-  for (std::size_t v = 0; v < positions.size(); ++v) {
-    const auto& q = scratch.point(importer.vertices[v]);
-    positions[v] = glm::dvec3(q[0], q[1], q[2]);
-  }
+  MeshRecords records = ext == ".off" || ext == ".obj" ? text_records(name, std::move(text), ext)
+                                                      : openmesh_records(name, file, ext, std::move(text));
   std::vector<glm::uvec3> triangles;
-  triangles.reserve(importer.faces.size());
-  for (std::size_t f = 0; f < importer.faces.size(); ++f) {
-    const auto& face = importer.faces[f];
+  triangles.reserve(records.faces.size());
+  for (std::size_t f = 0; f < records.faces.size(); ++f) {
+    const auto& face = records.faces[f];
     const std::string where = "face " + std::to_string(f);
     if (face.size() < 3) fail(name, where + " has only " + std::to_string(face.size()) + " vertices");
-    for (std::size_t i = 0; i < face.size(); ++i) {
-      if (face[i] == kNone) fail(name, where + " has an out-of-range vertex index");
-      for (std::size_t j = 0; j < i; ++j)
-        if (face[i] == face[j]) fail(name, where + " repeats vertex " + std::to_string(face[i]));
-    }
+    if (std::find(face.begin(), face.end(), kNoVertex) != face.end())
+      fail(name, where + " has an out-of-range vertex index");
+    if (const std::uint32_t v = repeated_vertex(face); v != kNone)
+      fail(name, where + " repeats vertex " + std::to_string(v));
     for (std::size_t i = 1; i + 1 < face.size(); ++i) triangles.emplace_back(face[0], face[i], face[i + 1]);
   }
-  return build(std::move(positions), std::move(triangles), importer.faces.size(), name, repair, inside);
+  return build(std::move(records.positions), std::move(triangles), records.faces.size(), name, repair, inside);
 }
 
 const TriMeshHolder& MeshLeaf::openmesh() const {

@@ -79,14 +79,15 @@ TEST(MeshIoThreads, ConcurrentWritesAndLoadsComeBackWhole) {
 }
 
 // While the shared lock is held elsewhere, neither a write nor a load may reach OpenMesh: both
-// wait for it, so they are serialised against each other and against any other OpenMesh IO.
+// wait for it, so they are serialised against each other and against any other OpenMesh IO. The
+// load is of PLY: OFF is read without OpenMesh (nodes/mesh_text.hpp) and takes no lock.
 TEST(MeshIoThreads, WritesAndLoadsWaitForTheOneLock) {
   const auto dir = test::temp_dir("mesh-io-lock");
   const TriangleMesh mesh = octahedron(glm::dvec3(0.0), 1.0);
-  write_mesh(mesh, dir / "ready.off");
+  write_mesh(mesh, dir / "ready.ply");
   std::unique_lock lock(openmesh_io_mutex());
   auto write = std::async(std::launch::async, [&] { write_mesh(mesh, dir / "written.off"); });
-  auto load = std::async(std::launch::async, [&] { return MeshLeaf::load(dir / "ready.off"); });
+  auto load = std::async(std::launch::async, [&] { return MeshLeaf::load(dir / "ready.ply"); });
   EXPECT_EQ(write.wait_for(std::chrono::milliseconds(300)), std::future_status::timeout);
   EXPECT_EQ(load.wait_for(std::chrono::milliseconds(0)), std::future_status::timeout);
   lock.unlock();
