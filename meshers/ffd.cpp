@@ -4,6 +4,7 @@
 #include "meshers/polygonize.hpp"
 #include "nodes/mesh_leaf.hpp"
 #include "nodes/warps.hpp"
+#include "runtime/graph_writer.hpp"
 
 #include <vector>
 
@@ -41,11 +42,9 @@ std::shared_ptr<const MeshLeaf> deform_child_mesh(const Graph& g, NodeId n, cons
 }
 
 std::shared_ptr<const Graph> attach_ffd_mesh(const Graph& graph, NodeId n, std::shared_ptr<const MeshLeaf> leaf) {
-  auto next = std::make_shared<Graph>(graph);
-  next->mesh[n] = static_cast<std::uint32_t>(next->meshes.size());
-  next->meshes.push_back(std::move(leaf));
-  compute_supports(*next);
-  return next;
+  GraphWriter writer(graph);
+  writer.attach_mesh(n, std::move(leaf));
+  return std::make_shared<const Graph>(writer.take());
 }
 
 Tree prepare_ffd(const Tree& tree, double precision) {

@@ -357,7 +357,7 @@ void orient_outward(const Accel& accel, const std::vector<glm::dvec3>& positions
 
 }  // namespace
 
-std::shared_ptr<const MeshLeaf> MeshLeaf::build(std::vector<glm::dvec3> positions,
+std::shared_ptr<MeshLeaf> MeshLeaf::build(std::vector<glm::dvec3> positions,
                                                 std::vector<glm::uvec3> triangles, std::size_t input_faces,
                                                 std::string name, bool repair, MeshInside inside) {
   for (std::size_t v = 0; v < positions.size(); ++v)

@@ -124,6 +124,11 @@ class MeshLeaf {
   static constexpr double kSurfaceBand = 1e-5;
   const MeshReport& report() const { return report_; }
   const std::string& name() const { return name_; }
+  /// The file load() read (as it was named to load(): relative paths are relative to the
+  /// working folder then), and whether repair was asked for; empty for meshes made in memory.
+  /// What a scene writer names (runtime/scene_write.hpp).
+  const std::filesystem::path& file() const { return file_; }
+  bool repair_requested() const { return repair_requested_; }
   /// Bytes held: vertex and index arrays, pseudo-normals and the Embree BVH estimate.
   std::size_t bytes() const;
   /// The OpenMesh form (nodes/trimesh.hpp), built on first use and shared.
@@ -132,7 +137,7 @@ class MeshLeaf {
  private:
   MeshLeaf() = default;
   /// Validation, orientation, repair and acceleration shared by load() and from_triangles().
-  static std::shared_ptr<const MeshLeaf> build(std::vector<glm::dvec3> positions,
+  static std::shared_ptr<MeshLeaf> build(std::vector<glm::dvec3> positions,
                                                std::vector<glm::uvec3> triangles, std::size_t input_faces,
                                                std::string name, bool repair, MeshInside inside);
   /// query_batch's shared answer for a block the surface's radius does not reach; false when it
@@ -143,6 +148,8 @@ class MeshLeaf {
   Closest far_query(const glm::dvec3& p, double radius) const;
   struct Accel;  // Embree device, scene and pseudo-normals
   std::string name_;
+  std::filesystem::path file_;
+  bool repair_requested_ = false;
   std::shared_ptr<TriangleMesh> surface_ = std::make_shared<TriangleMesh>();
   Aabb bounds_;
   double surface_band_ = 0;

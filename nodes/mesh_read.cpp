@@ -300,7 +300,10 @@ std::shared_ptr<const MeshLeaf> MeshLeaf::load(const std::filesystem::path& file
       fail(name, where + " repeats vertex " + std::to_string(v));
     for (std::size_t i = 1; i + 1 < face.size(); ++i) triangles.emplace_back(face[0], face[i], face[i + 1]);
   }
-  return build(std::move(records.positions), std::move(triangles), records.faces.size(), name, repair, inside);
+  auto leaf = build(std::move(records.positions), std::move(triangles), records.faces.size(), name, repair, inside);
+  leaf->file_ = file;
+  leaf->repair_requested_ = repair;
+  return leaf;
 }
 
 const TriMeshHolder& MeshLeaf::openmesh() const {

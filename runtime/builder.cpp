@@ -56,25 +56,7 @@ Builder::~Builder() = default;
 
 NodeId Builder::add(NodeKind kind, std::span<const double> params, std::span<const NodeId> children,
                     BooleanMode mode) {
-  Graph& g = graph_;
-  const auto id = static_cast<NodeId>(g.size());
-  g.kind.push_back(kind);
-  g.boolean.push_back(mode);
-  g.mesher.push_back(MesherHint::Auto);
-  g.param_begin.push_back(static_cast<std::uint32_t>(g.params.size()));
-  g.param_count.push_back(static_cast<std::uint32_t>(params.size()));
-  g.params.insert(g.params.end(), params.begin(), params.end());
-  g.child_begin.push_back(static_cast<std::uint32_t>(g.children.size()));
-  g.child_count.push_back(static_cast<std::uint32_t>(children.size()));
-  g.children.insert(g.children.end(), children.begin(), children.end());
-  g.derived_begin.push_back(0);
-  g.derived_count.push_back(0);
-  g.mesh.push_back(kNone);
-  g.name.push_back(kNone);
-  g.support_alone.emplace_back();
-  g.support_blended.emplace_back();
-  g.nonnegative.push_back(0);
-  return id;
+  return writer_.add(kind, params, children, mode);
 }
 
 void Builder::check_children(std::span<const NodeId> children, std::size_t min_count) {
@@ -82,7 +64,7 @@ void Builder::check_children(std::span<const NodeId> children, std::size_t min_c
     throw BuildError("children", "must hold at least " + std::to_string(min_count) + " node" +
                                      (min_count == 1 ? "" : "s"));
   for (std::size_t i = 0; i < children.size(); ++i)
-    if (children[i] >= graph_.size())
+    if (children[i] >= writer_.size())
       throw BuildError("children[" + std::to_string(i) + "]", "is not a node of this builder");
 }
 
@@ -136,13 +118,7 @@ NodeId Builder::curve(std::span<const glm::dvec3> points, Falloff f) {
   check_falloff(f);
   std::vector<double> s{static_cast<double>(points.size())};
   for (const auto& q : points) push3(s, q);
-  const NodeId id = add_primitive(NodeKind::Curve, s, f);
-  const std::vector<glm::dvec3> poly = curve_polyline(points, kCurveTolerance * f.radius);
-  graph_.derived_begin[id] = static_cast<std::uint32_t>(graph_.derived.size());
-  graph_.derived_count[id] = static_cast<std::uint32_t>(1 + 3 * poly.size());
-  graph_.derived.push_back(static_cast<double>(poly.size()));
-  for (const auto& q : poly) push3(graph_.derived, q);
-  return id;
+  return add_primitive(NodeKind::Curve, s, f);  // the writer derives its polyline
 }
 
 NodeId Builder::box(glm::dvec3 lo, glm::dvec3 hi, Falloff f) {
@@ -189,16 +165,7 @@ NodeId Builder::mesh(std::shared_ptr<const MeshLeaf> leaf, Falloff f) {
     throw BuildError("strength", "|strength| must be > threshold (" + std::to_string(threshold_) + ")");
   const MeshFieldParams m = mesh_field_params(f.radius, f.strength, threshold_);
   const double p[] = {m.R, m.F, m.kernel_radius, m.r0, m.query_radius};
-  const NodeId id = add(NodeKind::Mesh, p, {});
-  std::uint32_t index = kNone;
-  for (std::size_t i = 0; i < graph_.meshes.size(); ++i)
-    if (graph_.meshes[i] == leaf) index = static_cast<std::uint32_t>(i);
-  if (index == kNone) {
-    index = static_cast<std::uint32_t>(graph_.meshes.size());
-    graph_.meshes.push_back(std::move(leaf));
-  }
-  graph_.mesh[id] = index;
-  return id;
+  return writer_.add_mesh(std::move(leaf), p);
 }
 
 NodeId Builder::blend(std::span<const NodeId> c) {
@@ -221,13 +188,13 @@ NodeId Builder::subtract(std::span<const NodeId> c, BooleanMode mode) {
 NodeId Builder::local_blend(NodeId a, NodeId b, NodeId region, BooleanMode mode) {
   const NodeId c[] = {a, b, region};
   for (int i = 0; i < 3; ++i)
-    if (c[i] >= graph_.size())
+    if (c[i] >= writer_.size())
       throw BuildError(i == 0 ? "a" : i == 1 ? "b" : "region", "is not a node of this builder");
   return add(NodeKind::LocalBlend, {}, c, mode);
 }
 
 NodeId Builder::crop(NodeId child, glm::dvec3 lo, glm::dvec3 hi) {
-  if (child >= graph_.size()) throw BuildError("child", "is not a node of this builder");
+  if (child >= writer_.size()) throw BuildError("child", "is not a node of this builder");
   check_box(lo, hi);
   const double p[] = {lo.x, lo.y, lo.z, hi.x, hi.y, hi.z};
   const NodeId c[] = {child};
@@ -235,7 +202,7 @@ NodeId Builder::crop(NodeId child, glm::dvec3 lo, glm::dvec3 hi) {
 }
 
 NodeId Builder::affine(NodeId child, const glm::dmat4& m) {
-  if (child >= graph_.size()) throw BuildError("child", "is not a node of this builder");
+  if (child >= writer_.size()) throw BuildError("child", "is not a node of this builder");
   double fwd[12];
   for (int r = 0; r < 3; ++r)
     for (int c = 0; c < 4; ++c) {
@@ -251,7 +218,7 @@ NodeId Builder::affine(NodeId child, const glm::dmat4& m) {
 }
 
 NodeId Builder::twist(NodeId child, Axis axis, glm::dvec3 center, double rate) {
-  if (child >= graph_.size()) throw BuildError("child", "is not a node of this builder");
+  if (child >= writer_.size()) throw BuildError("child", "is not a node of this builder");
   require_finite("center", center);
   require_finite("rate", rate);
   const double p[] = {static_cast<double>(axis), center.x, center.y, center.z, rate};
@@ -260,7 +227,7 @@ NodeId Builder::twist(NodeId child, Axis axis, glm::dvec3 center, double rate) {
 }
 
 NodeId Builder::taper(NodeId child, Axis axis, glm::dvec3 center, double h0, double h1, double s0, double s1) {
-  if (child >= graph_.size()) throw BuildError("child", "is not a node of this builder");
+  if (child >= writer_.size()) throw BuildError("child", "is not a node of this builder");
   require_finite("center", center);
   require_finite("range", h0);
   require_finite("range", h1);
@@ -273,7 +240,7 @@ NodeId Builder::taper(NodeId child, Axis axis, glm::dvec3 center, double h0, dou
 }
 
 NodeId Builder::bend(NodeId child, Axis axis, glm::dvec3 center, double h0, double h1, double rate) {
-  if (child >= graph_.size()) throw BuildError("child", "is not a node of this builder");
+  if (child >= writer_.size()) throw BuildError("child", "is not a node of this builder");
   require_finite("center", center);
   require_finite("range", h0);
   require_finite("range", h1);
@@ -286,7 +253,7 @@ NodeId Builder::bend(NodeId child, Axis axis, glm::dvec3 center, double h0, doub
 
 NodeId Builder::ffd(NodeId child, glm::dvec3 lo, glm::dvec3 hi, glm::ivec3 dims,
                     std::span<const glm::dvec3> points, Falloff f) {
-  if (child >= graph_.size()) throw BuildError("child", "is not a node of this builder");
+  if (child >= writer_.size()) throw BuildError("child", "is not a node of this builder");
   check_box(lo, hi);
   if (dims.x < 1 || dims.y < 1 || dims.z < 1 || dims.x > 64 || dims.y > 64 || dims.z > 64)
     throw BuildError("dims", "must be three whole numbers from 1 to 64");
@@ -306,84 +273,14 @@ NodeId Builder::ffd(NodeId child, glm::dvec3 lo, glm::dvec3 hi, glm::ivec3 dims,
 }
 
 void Builder::set_name(NodeId node, std::string name) {
-  graph_.name.at(node) = static_cast<std::uint32_t>(graph_.names.size());
-  graph_.names.push_back(std::move(name));
+  writer_.set_name(node, std::move(name));
 }
 
-void Builder::set_mesher(NodeId node, MesherHint hint) { graph_.mesher.at(node) = hint; }
-
-// Supports and signs, bottom-up (children have smaller ids). The rules follow from the
-// formulas in nodes/operators.hpp: where every child is 0, a blend, a union of either kind and
-// an R-function intersection are 0; a min/max intersection of non-negative fields is 0 where
-// either is; a min/max difference is 0 where A is; an R-function difference is not 0 anywhere
-// (it tends to 2T/(2+sqrt 2) far from both), so its support is everything.
-void compute_supports(Graph& g) {
-  for (NodeId n = 0; n < g.size(); ++n) {
-    const NodeKind k = g.kind[n];
-    const auto p = g.params_of(n);
-    const auto c = g.children_of(n);
-    auto sup = [&](NodeId child, bool blended) { return g.support(child, blended); };
-    bool all_children_nonneg = true;
-    for (NodeId child : c) all_children_nonneg = all_children_nonneg && g.nonnegative[child];
-    bool nonneg_both = true;  // the sign must hold in both contexts
-    for (int blended = 0; blended < 2; ++blended) {
-      bool nonneg = all_children_nonneg;
-      // Children of a blend or local blend see a blend above them.
-      const bool below = blended || k == NodeKind::Blend || k == NodeKind::LocalBlend;
-      Aabb box;
-      switch (kind_family(k)) {
-        case Family::Primitive:
-          box = skeleton_bounds(k, g.skeleton_of(n)).expanded(p[kPrimR]);
-          nonneg = p[kPrimF] > 0.0;
-          break;
-        case Family::Mesh:
-          box = g.meshes[g.mesh[n]]->bounds().expanded(p[0]);
-          nonneg = p[1] > 0.0;
-          break;
-        case Family::Warp:
-          if (k == NodeKind::Ffd) {  // its field lives on its deformed mesh, once meshed
-            box = g.mesh[n] != kNone ? g.meshes[g.mesh[n]]->bounds().expanded(p[9]) : Aabb::everything();
-            nonneg = p[10] > 0.0;
-          } else {
-            box = warp_bounds(k, p.data(), sup(c[0], below));
-          }
-          break;
-        case Family::Operator: {
-          const bool rf = use_rfunction(g.boolean[n], blended);
-          for (NodeId child : c) box = merge(box, sup(child, below));
-          if (k == NodeKind::Intersection && !rf) {
-            if (all_children_nonneg) {
-              box = Aabb::everything();
-              for (NodeId child : c) box = ht::intersect(box, sup(child, below));
-            }
-          } else if (k == NodeKind::Difference) {
-            box = rf && c.size() > 1 ? Aabb::everything() : sup(c[0], below);
-            nonneg = c.size() > 1 || all_children_nonneg;  // one child: the child itself
-          } else if (k == NodeKind::Union && !rf) {
-            nonneg = false;
-            for (NodeId child : c) nonneg = nonneg || g.nonnegative[child];
-          } else if (k == NodeKind::LocalBlend) {
-            box = merge(sup(c[0], below), sup(c[1], below));
-            nonneg = g.nonnegative[c[0]] && g.nonnegative[c[1]];
-          } else if (k == NodeKind::Crop) {
-            box = ht::intersect(sup(c[0], below), Aabb{{p[0], p[1], p[2]}, {p[3], p[4], p[5]}}.expanded(crop_reach(p.data())));
-            nonneg = true;
-          }
-          break;
-        }
-      }
-      if (box.empty()) box = Aabb{};
-      (blended ? g.support_blended : g.support_alone)[n] = box;
-      nonneg_both = nonneg_both && nonneg;
-    }
-    g.nonnegative[n] = nonneg_both ? 1 : 0;
-  }
-}
+void Builder::set_mesher(NodeId node, MesherHint hint) { writer_.set_mesher(node, hint); }
 
 Tree Builder::build(NodeId root) {
-  if (root >= graph_.size()) throw BuildError("root", "is not a node of this builder");
-  compute_supports(graph_);
-  return Tree(std::make_shared<const Graph>(graph_), root, threshold_, settings_);
+  if (root >= writer_.size()) throw BuildError("root", "is not a node of this builder");
+  return Tree(std::make_shared<const Graph>(writer_.graph()), root, threshold_, settings_);
 }
 
 }  // namespace ht

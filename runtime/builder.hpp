@@ -15,6 +15,7 @@
 
 #include "nodes/mesh_inside.hpp"
 #include "runtime/graph.hpp"
+#include "runtime/graph_writer.hpp"
 #include "runtime/tree.hpp"
 
 #include <glm/mat4x4.hpp>
@@ -123,7 +124,7 @@ class Builder {
   double threshold_;
   std::filesystem::path base_dir_;
   MesherSettings settings_;
-  Graph graph_;
+  GraphWriter writer_;
   std::unique_ptr<MeshCache> cache_;
 };
 

@@ -59,7 +59,8 @@ namespace ht {
   X(Affine, "frame out = inverse affine map of frame a")                \
   X(Twist, "frame out = inverse twist of frame a")                      \
   X(Taper, "frame out = inverse taper of frame a")                      \
-  X(Bend, "frame out = inverse bend of frame a")
+  X(Bend, "frame out = inverse bend of frame a")                      \
+  X(Skip, "no lane of frame a in box k: s[out] = 0, jump past the range")
 
 enum class OpCode : std::uint8_t {
 #define HT_X(name, doc) name,
@@ -77,6 +78,10 @@ const char* op_name(OpCode op);
 ///   Zero                  s[out] = 0
 ///   Add ... DiffRFunction s[out] = s[a] op s[b]
 ///   LocalBlend*           s[out] blended in place with s[a] by the weight s[b]
+///   Skip                  guards the range of instructions after it, which computes s[out]
+///                         from frame a and is exactly 0 outside a box: when no lane of the
+///                         block lies in the box, s[out] = 0 and the range is jumped over.
+///                         Constants at k(): the box lo(3), hi(3), the range's length.
 /// k() is a 24-bit index into the constant pool, kept in `b` and `hi`; a Constant's value is a
 /// float immediate in `a` and `b`.
 struct Instruction {
@@ -129,6 +134,7 @@ struct Tape {
   std::uint16_t registers = 3;          ///< rows of the register file used (rows 0-2: the input frame)
   std::uint16_t result = 0;             ///< the register holding the root's value
   float threshold = 0.5f;
+  std::uint32_t skips = 0;              ///< Skip instructions (batches are sorted in space for them)
 
   std::size_t size() const { return code.size(); }
   std::size_t bytes() const {
@@ -143,15 +149,20 @@ struct Tape {
 /// Compiles `root` (a root on its own: `auto` picks min/max there, unless `under_blend` says that
 /// something above blends it, as when a mesher needs a child's field in its parent's context).
 /// With `region`, the tape is specialized to that box: shorter, and equal to the full tape inside it.
+/// With `guards`, a subtree whose support box is small against its parent's (under half its
+/// volume) and whose code is long enough to pay for a box test is guarded by a Skip: blocks of
+/// points that all miss the box jump over it. Values are the same with or without guards (the
+/// subtree is exactly 0 outside its box, which the guard pads against float rounding).
 Tape compile_tape(std::shared_ptr<const Graph> graph, NodeId root, double threshold, const Aabb* region = nullptr,
-                  bool under_blend = false);
+                  bool under_blend = false, bool guards = true);
 
 /// The tape specialized to `region`, made from `parent`, a tape valid over a box that holds
 /// region (or everywhere): leaves that are 0 or constant over the region are replaced, decided
 /// operations dropped, and what no longer reaches the result removed. Its values inside the
 /// region equal the parent's (to float rounding where constants replace leaves); it costs one
 /// interval pass over the parent's instructions, however big the tree behind them. The
-/// polygonizer narrows each brick's tape from a tape of a block of bricks this way.
+/// polygonizer narrows each brick's tape from a tape of a block of bricks this way. Skips are
+/// dropped (their ranges then always run): a narrowed box is small.
 Tape narrow_tape(const Tape& parent, const Aabb& region);
 
 /// A conservative range of a node's field over a box (interval analysis; the compiler's pruning

@@ -24,12 +24,93 @@ constexpr int kMaxDepth = kMaxTreeDepth;
 
 class Compiler {
  public:
-  Compiler(const Graph& g, double T, Tape& tape) : g_(g), T_(T), tape_(tape) {}
+  Compiler(const Graph& g, double T, Tape& tape, bool guards) : g_(g), T_(T), tape_(tape), guards_(guards) {
+    for (auto& v : zero_known_) v.assign(guards ? g.size() : 0, -1);
+  }
 
   // Emits code for node n reading frame `frame`; returns its scalar register or kNoValue.
   // `region` is the box of interest in this frame's coordinates, or null for everywhere.
   int node(NodeId n, int frame, bool under_blend, const Aabb* region, int depth) {
     if (depth > kMaxDepth) throw CompileError("the tree is deeper than " + std::to_string(kMaxDepth) + " nodes");
+    const Aabb& box = g_.support(n, under_blend);
+    const double volume = box_volume(box), parent = parent_volume_;
+    if (!guards_ || !guard_worthy(n, under_blend, box, volume, region)) {
+      parent_volume_ = std::isfinite(volume) ? volume : parent;
+      const int r = unguarded(n, frame, under_blend, region, depth);
+      parent_volume_ = parent;
+      return r;
+    }
+    // A placeholder Skip, patched once the subtree's code is known, or taken out again when
+    // that code is too short to pay for the box test.
+    const std::size_t mark = tape_.code.size();
+    const Aabb padded = box.expanded(kGuardPad * (1.0 + std::max(glm::length(box.lo), glm::length(box.hi))));
+    const std::uint32_t k = constants({padded.lo.x, padded.lo.y, padded.lo.z, padded.hi.x, padded.hi.y, padded.hi.z, 0.0});
+    emit_k(OpCode::Skip, n, 0, frame, k);
+    parent_volume_ = volume;
+    const int r = unguarded(n, frame, under_blend, region, depth);
+    parent_volume_ = parent;
+    const std::size_t length = tape_.code.size() - mark - 1;
+    if (r == kNoValue || length < kGuardMinLength || tape_.code.back().out != r) {
+      tape_.code.erase(tape_.code.begin() + std::ptrdiff_t(mark));
+      tape_.source.erase(tape_.source.begin() + std::ptrdiff_t(mark));
+      return r;
+    }
+    tape_.code[mark].out = static_cast<std::uint16_t>(r);
+    tape_.constants[k + 6] = static_cast<float>(length);
+    ++tape_.skips;
+    return r;
+  }
+
+  // Is a guard worth trying around n? Operators and warps only (a leaf costs what the test
+  // does), with a bounded support well inside the parent's, and not where the region of
+  // interest lies inside the support anyway (the guard would never skip there).
+  bool guard_worthy(NodeId n, bool under_blend, const Aabb& box, double volume, const Aabb* region) const {
+    const Family f = kind_family(g_.kind[n]);
+    if (f != Family::Operator && f != Family::Warp) return false;
+    // Not the root (no parent volume): the points asked of a tree are mostly near it.
+    if (g_.kind[n] == NodeKind::Ffd || !box.finite() || !std::isfinite(parent_volume_) ||
+        !(volume < kGuardFraction * parent_volume_))
+      return false;
+    if (region && region->finite() && box.contains(region->lo) && box.contains(region->hi)) return false;
+    return zero_in_float(n, under_blend);
+  }
+
+  // Whether the tape computes exactly 0 for n outside its support, so that a skipped guard gives
+  // the same bits as the code it skips. R-functions do not: their shifted formulas leave float
+  // residues of about 1e-13 where the exact field is 0.
+  bool zero_in_float(NodeId n, bool under_blend) const {
+    std::int8_t& known = zero_known_[under_blend ? 1 : 0][n];
+    if (known >= 0) return known != 0;
+    const NodeKind k = g_.kind[n];
+    const auto c = g_.children_of(n);
+    const bool below = under_blend || k == NodeKind::Blend || k == NodeKind::LocalBlend;
+    bool zero = true;
+    switch (kind_family(k)) {
+      case Family::Primitive:
+      case Family::Mesh: break;
+      case Family::Warp: zero = k != NodeKind::Ffd && zero_in_float(c[0], below); break;
+      case Family::Operator:
+        if (k != NodeKind::Blend && k != NodeKind::Crop && use_rfunction(g_.boolean[n], under_blend)) {
+          zero = false;
+        } else if (k == NodeKind::Difference) {
+          zero = zero_in_float(c[0], below);  // max(0, min(0, x)) = 0 whatever B is
+        } else {
+          for (NodeId child : c) zero = zero && zero_in_float(child, below);
+        }
+        break;
+    }
+    known = zero ? 1 : 0;
+    return zero;
+  }
+
+  static double box_volume(const Aabb& b) {
+    if (b.empty()) return 0.0;
+    if (!b.finite()) return std::numeric_limits<double>::infinity();
+    const glm::dvec3 s = b.size();
+    return s.x * s.y * s.z;
+  }
+
+  int unguarded(NodeId n, int frame, bool under_blend, const Aabb* region, int depth) {
     if (region) {
       const Interval iv = field_interval(g_, n, T_, *region, under_blend);
       if (iv.zero()) return kNoValue;
@@ -301,7 +382,8 @@ class Compiler {
         const Interval iv = field_interval(g_, c, T_, *region, true);
         return !iv.zero() && iv.lo != iv.hi;
       };
-      if (g_.kind[c] == NodeKind::Blend && flat()) {
+      const bool guarded = guards_ && guard_worthy(c, true, g_.support(c, true), box_volume(g_.support(c, true)), region);
+      if (g_.kind[c] == NodeKind::Blend && !guarded && flat()) {
         todo.push_back({c, 0});
         continue;
       }
@@ -422,9 +504,19 @@ class Compiler {
     return child;
   }
 
+  // A guard around fewer instructions than this costs more than it saves.
+  static constexpr std::size_t kGuardMinLength = 4;
+  // Guard a subtree whose box has under this fraction of its parent's volume.
+  static constexpr double kGuardFraction = 0.5;
+  // Relative padding of a guard's box: floats just outside the support box may round inside it.
+  static constexpr double kGuardPad = 1e-5;
+
   const Graph& g_;
   double T_;
   Tape& tape_;
+  bool guards_ = true;
+  double parent_volume_ = std::numeric_limits<double>::infinity();
+  mutable std::vector<std::int8_t> zero_known_[2];  // zero_in_float per context: -1 unknown, 0, 1
   std::vector<int> free_scalars_, free_frames_;
   std::uint16_t high_ = 3;  // rows 0-2: the input frame
 };
@@ -455,6 +547,9 @@ std::string Tape::listing() const {
     const Instruction& c = code[i];
     if (c.op == OpCode::Constant)
       std::snprintf(line, sizeof line, "%5zu  %-20s out=%u value=%g\n", i, op_name(c.op), c.out, double(c.immediate()));
+    else if (c.op == OpCode::Skip)
+      std::snprintf(line, sizeof line, "%5zu  %-20s out=%u frame=%u k=%u length=%g\n", i, op_name(c.op), c.out, c.a, c.k(),
+                    double(constants[c.k() + 6]));
     else if (c.op <= OpCode::Mesh || c.op == OpCode::Crop || c.op >= OpCode::Affine)
       std::snprintf(line, sizeof line, "%5zu  %-20s out=%u frame=%u k=%u\n", i, op_name(c.op), c.out, c.a, c.k());
     else
@@ -465,11 +560,11 @@ std::string Tape::listing() const {
 }
 
 Tape compile_tape(std::shared_ptr<const Graph> graph, NodeId root, double threshold, const Aabb* region,
-                  bool under_blend) {
+                  bool under_blend, bool guards) {
   Tape tape;
   tape.graph = graph;
   tape.threshold = static_cast<float>(threshold);
-  Compiler compiler(*graph, threshold, tape);
+  Compiler compiler(*graph, threshold, tape, guards);
   const int r = compiler.materialize(compiler.node(root, 0, under_blend, region, 0));
   tape.result = static_cast<std::uint16_t>(r);
   tape.registers = compiler.register_count();

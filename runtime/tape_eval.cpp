@@ -1,16 +1,15 @@
 #include "runtime/tape_eval.hpp"
 
 #include "nodes/mesh_leaf.hpp"
+#include "runtime/morton.hpp"
 #include "runtime/tape_ops.hpp"
 
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
-#include <atomic>
 #include <cstdlib>
 #include <stdexcept>
 #include <string>
-#include <string_view>
 #include <cmath>
 #include <limits>
 #include <type_traits>
@@ -318,11 +317,27 @@ HT_LANE void warp_loop(const Block<T>& b, const Instruction& ins, const float* k
   }
 }
 
+HT_LANE float lane_value(float x) { return x; }
+HT_LANE float lane_value(const Dual& x) { return x.v; }
+
+// Whether any query point of the block (not the padding lanes) lies in the box lo(3) hi(3).
+template <class T>
+HT_LANE bool any_in_box(const Block<T>& b, int frame, const float* box) {
+  const T* x = b.axis(frame, 0);
+  const T* y = b.axis(frame, 1);
+  const T* z = b.axis(frame, 2);
+  int hit = 0;
+  for (int i = 0; i < b.count; ++i) hit |= in_box(lane_value(x[i]), lane_value(y[i]), lane_value(z[i]), box) ? 1 : 0;
+  return hit != 0;
+}
+
 template <class T>
 HT_LANE void run(const Tape& tape, const Block<T>& b, int n) {
   const float t = tape.threshold;
   const float* pool = tape.constants.data();
-  for (const Instruction& ins : tape.code) {
+  const std::size_t size = tape.code.size();
+  for (std::size_t pc = 0; pc < size; ++pc) {
+    const Instruction& ins = tape.code[pc];
     const float* k = pool + ins.k();
     T* out = b.reg(ins.out);
     const T* ra = b.reg(ins.a);
@@ -384,6 +399,12 @@ HT_LANE void run(const Tape& tape, const Block<T>& b, int n) {
       case OpCode::Twist:
       case OpCode::Taper:
       case OpCode::Bend: warp_loop(b, ins, k, n); break;
+      case OpCode::Skip:
+        if (!any_in_box(b, ins.a, k)) {
+          for (int i = 0; i < n; ++i) out[i] = T(0.0f);
+          pc += static_cast<std::size_t>(k[6]);
+        }
+        break;
     }
   }
 }
@@ -429,31 +450,9 @@ Run<T> builds(TapeIsa isa) {
   if constexpr (values) return run_values_baseline; else return run_gradients_baseline;
 }
 
-TapeIsa widest_supported() {
-  for (const TapeIsa isa : {TapeIsa::Avx512, TapeIsa::Avx2, TapeIsa::Sse4})
-    if (tape_isa_supported(isa)) return isa;
-  return TapeIsa::Baseline;
-}
-
-TapeIsa from_environment() {
-  const char* want = std::getenv("HYBRIDTREE_TAPE_ISA");
-  if (!want || !*want) return widest_supported();
-  for (const TapeIsa isa : {TapeIsa::Avx512, TapeIsa::Avx2, TapeIsa::Sse4, TapeIsa::Baseline})
-    if (std::string_view(want) == tape_isa_name(isa)) {
-      if (!tape_isa_supported(isa))
-        throw std::invalid_argument(std::string("HYBRIDTREE_TAPE_ISA=") + want + ": this CPU cannot run it");
-      return isa;
-    }
-  throw std::invalid_argument(std::string("HYBRIDTREE_TAPE_ISA=") + want + ": not one of avx512, avx2, sse4, baseline");
-}
-
-std::atomic<int> g_isa{-1};  // the TapeIsa in use, -1 until the first call
-
 template <class T>
 void run_build(const Tape& tape, const Block<T>& b, int n) {
-  int isa = g_isa.load(std::memory_order_relaxed);
-  if (isa < 0) isa = static_cast<int>(tape_isa());
-  builds<T>(static_cast<TapeIsa>(isa))(tape, b, n);
+  builds<T>(tape_isa())(tape, b, n);
 }
 void run_values(const Tape& tape, const Block<float>& b, int n) { run_build(tape, b, n); }
 void run_gradients(const Tape& tape, const Block<Dual>& b, int n) { run_build(tape, b, n); }
@@ -474,50 +473,19 @@ void for_blocks(std::size_t n, Body&& body) {
   });
 }
 
+// A batch in no order puts points from everywhere into every block, and a Skip skips only
+// when a whole block misses its box. Tapes with Skips therefore run big batches in Morton
+// order; each point's value does not depend on the block it lands in, so the results are the
+// same either way. Empty: the batch runs in its own order.
+constexpr std::size_t kOrderMinPoints = 8 * kBlock;
+
+template <class Coord>
+std::vector<std::uint32_t> batch_order(const Tape& tape, std::size_t n, Coord coord) {
+  if (tape.skips == 0 || n < kOrderMinPoints || n > std::numeric_limits<std::uint32_t>::max()) return {};
+  return morton::order(n, coord);
+}
+
 }  // namespace
-
-const char* tape_isa_name(TapeIsa isa) {
-  switch (isa) {
-    case TapeIsa::Avx512: return "avx512";
-    case TapeIsa::Avx2: return "avx2";
-    case TapeIsa::Sse4: return "sse4";
-    case TapeIsa::Baseline: return "baseline";
-  }
-  return "baseline";
-}
-
-bool tape_isa_supported(TapeIsa isa) {
-#ifdef HT_X86_BUILDS
-  switch (isa) {
-    case TapeIsa::Avx512:
-      return __builtin_cpu_supports("avx512f") && __builtin_cpu_supports("avx512vl") &&
-             __builtin_cpu_supports("avx512dq") && __builtin_cpu_supports("avx512bw") && __builtin_cpu_supports("fma") &&
-             __builtin_cpu_supports("bmi2");
-    case TapeIsa::Avx2: return __builtin_cpu_supports("avx2") && __builtin_cpu_supports("fma") && __builtin_cpu_supports("bmi2");
-    case TapeIsa::Sse4: return __builtin_cpu_supports("sse4.2") && __builtin_cpu_supports("popcnt");
-    case TapeIsa::Baseline: return true;
-  }
-  return false;
-#else
-  return isa == TapeIsa::Baseline;
-#endif
-}
-
-TapeIsa tape_isa() {
-  int isa = g_isa.load(std::memory_order_acquire);
-  if (isa < 0) {
-    int expected = -1;
-    g_isa.compare_exchange_strong(expected, static_cast<int>(from_environment()), std::memory_order_acq_rel);
-    isa = g_isa.load(std::memory_order_acquire);
-  }
-  return static_cast<TapeIsa>(isa);
-}
-
-void force_tape_isa(TapeIsa isa) {
-  if (!tape_isa_supported(isa))
-    throw std::invalid_argument(std::string("force_tape_isa: this CPU cannot run ") + tape_isa_name(isa));
-  g_isa.store(static_cast<int>(isa), std::memory_order_release);
-}
 
 TapeEvaluator::TapeEvaluator(std::shared_ptr<const Tape> tape) : tape_(std::move(tape)) {}
 TapeEvaluator::~TapeEvaluator() = default;
@@ -540,26 +508,46 @@ void TapeEvaluator::field_block(const float* x, const float* y, const float* z, 
 }
 
 void TapeEvaluator::field(const float* x, const float* y, const float* z, std::size_t n, float* values) const {
+  const auto order = batch_order(*tape_, n, [&](std::size_t i) { return glm::vec3(x[i], y[i], z[i]); });
+  if (order.empty()) {
+    for_blocks(n, [&](std::size_t block) {
+      const std::size_t at = block * kBlock;
+      const int count = static_cast<int>(std::min<std::size_t>(kBlock, n - at));
+      field_block(x + at, y + at, z + at, count, values + at);
+    });
+    return;
+  }
   for_blocks(n, [&](std::size_t block) {
     const std::size_t at = block * kBlock;
     const int count = static_cast<int>(std::min<std::size_t>(kBlock, n - at));
-    field_block(x + at, y + at, z + at, count, values + at);
+    float bx[kBlock] = {}, by[kBlock] = {}, bz[kBlock] = {}, v[kBlock];
+    for (int i = 0; i < count; ++i) {
+      const std::uint32_t j = order[at + std::size_t(i)];
+      bx[i] = x[j];
+      by[i] = y[j];
+      bz[i] = z[j];
+    }
+    field_block(bx, by, bz, count, v);
+    for (int i = 0; i < count; ++i) values[order[at + std::size_t(i)]] = v[i];
   });
 }
 
 void TapeEvaluator::field(std::span<const glm::dvec3> points, std::span<double> values) const {
   if (values.size() != points.size()) throw std::invalid_argument("TapeEvaluator::field: values.size() != points.size()");
+  const auto order = batch_order(*tape_, points.size(), [&](std::size_t i) { return glm::vec3(points[i]); });
+  auto index = [&](std::size_t i) { return order.empty() ? i : std::size_t(order[i]); };
   for_blocks(points.size(), [&](std::size_t block) {
     const std::size_t at = block * kBlock;
     const int count = static_cast<int>(std::min<std::size_t>(kBlock, points.size() - at));
     float x[kBlock] = {}, y[kBlock] = {}, z[kBlock] = {}, v[kBlock];
     for (int i = 0; i < count; ++i) {
-      x[i] = static_cast<float>(points[at + std::size_t(i)].x);
-      y[i] = static_cast<float>(points[at + std::size_t(i)].y);
-      z[i] = static_cast<float>(points[at + std::size_t(i)].z);
+      const glm::dvec3& p = points[index(at + std::size_t(i))];
+      x[i] = static_cast<float>(p.x);
+      y[i] = static_cast<float>(p.y);
+      z[i] = static_cast<float>(p.z);
     }
     field_block(x, y, z, count, v);
-    for (int i = 0; i < count; ++i) values[at + std::size_t(i)] = v[i];
+    for (int i = 0; i < count; ++i) values[index(at + std::size_t(i))] = v[i];
   });
 }
 
@@ -574,6 +562,8 @@ void TapeEvaluator::gradient(std::span<const glm::dvec3> points, std::span<doubl
                              std::span<glm::dvec3> gradients) const {
   if (gradients.size() != points.size() || (!values.empty() && values.size() != points.size()))
     throw std::invalid_argument("TapeEvaluator::gradient: output sizes differ from points.size()");
+  const auto order = batch_order(*tape_, points.size(), [&](std::size_t i) { return glm::vec3(points[i]); });
+  auto index = [&](std::size_t i) { return order.empty() ? i : std::size_t(order[i]); };
   for_blocks(points.size(), [&](std::size_t block) {
     Workspace& ws = thread_workspace();
     const std::size_t rows = std::size_t(tape_->registers) * kBlock;
@@ -584,7 +574,7 @@ void TapeEvaluator::gradient(std::span<const glm::dvec3> points, std::span<doubl
     const int padded = std::min(kBlock, (count + kChunk - 1) / kChunk * kChunk);
     for (int j = 0; j < 3; ++j) std::fill(b.axis(0, j) + count, b.axis(0, j) + padded, Dual(0.0f));
     for (int i = 0; i < count; ++i) {
-      const glm::dvec3& p = points[at + std::size_t(i)];
+      const glm::dvec3& p = points[index(at + std::size_t(i))];
       b.axis(0, 0)[i] = Dual(static_cast<float>(p.x), 1, 0, 0);
       b.axis(0, 1)[i] = Dual(static_cast<float>(p.y), 0, 1, 0);
       b.axis(0, 2)[i] = Dual(static_cast<float>(p.z), 0, 0, 1);
@@ -592,8 +582,9 @@ void TapeEvaluator::gradient(std::span<const glm::dvec3> points, std::span<doubl
     run_gradients(*tape_, b, count);
     const Dual* r = b.reg(tape_->result);
     for (int i = 0; i < count; ++i) {
-      if (!values.empty()) values[at + std::size_t(i)] = r[i].v;
-      gradients[at + std::size_t(i)] = glm::dvec3(r[i].dx, r[i].dy, r[i].dz);
+      const std::size_t j = index(at + std::size_t(i));
+      if (!values.empty()) values[j] = r[i].v;
+      gradients[j] = glm::dvec3(r[i].dx, r[i].dy, r[i].dz);
     }
   });
 }

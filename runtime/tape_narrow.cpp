@@ -16,8 +16,8 @@ namespace {
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
 bool is_leaf(OpCode op) { return op <= OpCode::Mesh; }
-bool is_warp(OpCode op) { return op >= OpCode::Affine; }
-bool uses_constants(OpCode op) { return is_leaf(op) || is_warp(op) || op == OpCode::Crop; }
+bool is_warp(OpCode op) { return op >= OpCode::Affine && op <= OpCode::Bend; }
+bool uses_constants(OpCode op) { return is_leaf(op) || is_warp(op) || op == OpCode::Crop || op == OpCode::Skip; }
 
 // Phase 1: bound each register over the box and decide each instruction: kept as it is,
 // replaced (a leaf by Zero or Constant, a local blend by its union or sum) or dropped (an
@@ -42,6 +42,7 @@ void bound_and_decide(const Tape& parent, const Aabb& region, std::vector<Instru
     Interval& out = iv[ins.out];
     const bool in_place = ins.out == ins.a;
     switch (ins.op) {
+      case OpCode::Skip: break;  // dropped: its range runs, and gives the same values
       case OpCode::Zero: out = {}; keep(ins, n); break;
       case OpCode::Constant: out = {ins.immediate(), ins.immediate()}; keep(ins, n); break;
       case OpCode::Add:

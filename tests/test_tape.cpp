@@ -45,22 +45,12 @@ bool close_to_tree(const Graph& g, NodeId root, const dvec3& p, double tape, dou
   return tape >= lo - tol && tape <= hi + tol;
 }
 
-std::vector<std::shared_ptr<const MeshLeaf>> test_meshes() {
-  static const auto meshes = [] {
-    std::vector<std::shared_ptr<const MeshLeaf>> m;
-    m.push_back(MeshLeaf::load(test::cgal_mesh("eight.off")));
-    m.push_back(MeshLeaf::load(test::cgal_mesh("sphere.off")));
-    return m;
-  }();
-  return meshes;
-}
-
 }  // namespace
 
 TEST(Tape, EqualsTheTreeOnRandomTrees) {
   test::Rng rng(51);
   test::RandomTreeOptions opt;
-  opt.meshes = test_meshes();
+  opt.meshes = test::small_meshes();
   std::size_t points = 0, ill_conditioned = 0;
   constexpr int kTrees = 2000, kPoints = 256;
   for (int trial = 0; trial < kTrees; ++trial) {
@@ -99,7 +89,7 @@ TEST(Tape, EveryInstructionSetGivesTheSameValues) {
   const TapeIsa widest = tape_isa();
   test::Rng rng(53);
   test::RandomTreeOptions opt;
-  opt.meshes = test_meshes();
+  opt.meshes = test::small_meshes();
   constexpr int kTrees = 400, kPoints = 300;  // 300: a full block and a ragged one
   for (int trial = 0; trial < kTrees; ++trial) {
     Builder b(kT);
@@ -144,11 +134,17 @@ TEST(Tape, ChainsOfBlendsHoldTwoRegisters) {
     NodeId chain = points[0];
     for (int i = 1; i < 900; ++i) chain = right ? b.blend({points[std::size_t(i)], chain}) : b.blend({chain, points[std::size_t(i)]});
     const Tree t = b.build(chain);
-    const Tape tape = compile_tape(t.graph_ptr(), chain, kT);
+    const Tape tape = compile_tape(t.graph_ptr(), chain, kT, nullptr, false, /*guards=*/false);
     EXPECT_EQ(tape.leaf_count(), 900u);
     EXPECT_EQ(tape.size(), 1799u);
     EXPECT_LE(tape.registers, 5u) << (right ? "right" : "left");
-    const TapeEvaluator eval(std::make_shared<const Tape>(tape));
+    // With Skip guards the points in order along x make prefixes of the chain that are guarded
+    // where their box is under half their parent's: a register more a level, a few levels.
+    const Tape guarded = compile_tape(t.graph_ptr(), chain, kT);
+    EXPECT_GT(guarded.skips, 0u);
+    EXPECT_EQ(guarded.size(), 1799u + guarded.skips);
+    EXPECT_LE(guarded.registers, 5u + 2u * guarded.skips) << (right ? "right" : "left");
+    const TapeEvaluator eval(std::make_shared<const Tape>(guarded));
     for (const dvec3& p : {dvec3(0.5, 0.05, 0.0), dvec3(4.0, 0.1, 0.05), dvec3(8.95, 0.0, 0.0)}) {
       const double want = reference_field(t.graph(), chain, kT, p);
       EXPECT_NEAR(eval.field(p), want, 1e-4 * std::max(1.0, std::abs(want))) << p.x;
@@ -159,7 +155,7 @@ TEST(Tape, ChainsOfBlendsHoldTwoRegisters) {
 TEST(Tape, GradientsEqualTheTreeOnRandomTrees) {
   test::Rng rng(52);
   test::RandomTreeOptions opt;
-  opt.meshes = test_meshes();
+  opt.meshes = test::small_meshes();
   std::size_t compared = 0, skipped = 0;
   for (int trial = 0; trial < 300; ++trial) {
     Builder b(kT);
@@ -200,7 +196,7 @@ TEST(Tape, GradientsEqualTheTreeOnRandomTrees) {
 TEST(Tape, SpecializedTapeEqualsFullTapeInsideItsBox) {
   test::Rng rng(53);
   test::RandomTreeOptions opt;
-  opt.meshes = test_meshes();
+  opt.meshes = test::small_meshes();
   std::size_t shorter = 0, trials = 0;
   for (int trial = 0; trial < 600; ++trial) {
     Builder b(kT);
@@ -264,7 +260,7 @@ TEST(Tape, DecidedMinMaxBranchesAreDropped) {
 TEST(Tape, IntervalsHoldEverySampledValue) {
   test::Rng rng(54);
   test::RandomTreeOptions opt;
-  opt.meshes = test_meshes();
+  opt.meshes = test::small_meshes();
   for (int trial = 0; trial < 300; ++trial) {
     Builder b(kT);
     const NodeId root = test::random_tree(b, rng, opt);

@@ -12,11 +12,13 @@
 #include "meshers/surface_field.hpp"
 #include "nodes/mesh_leaf.hpp"
 #include "runtime/scene.hpp"
+#include "runtime/scene_write.hpp"
 #include "runtime/tape.hpp"
 #include "runtime/tape_eval.hpp"
 #include "runtime/tree_eval.hpp"
 #include "tools/cli_io.hpp"
 #include "tools/npy.hpp"
+#include "tools/optimize_cli.hpp"
 #include "tools/render_cli.hpp"
 #include "tools/scenes.hpp"
 
@@ -87,10 +89,16 @@ std::string defects_text(const ht::MeshReport& r) {
   return s;
 }
 
-int cmd_info(const std::string& scene) {
+int cmd_info(const std::string& scene, bool optimize) {
   const auto t0 = std::chrono::steady_clock::now();
   const ht::Tree tree = ht::load_scene(scene);
   const double load_s = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  std::string optimizer;
+  if (optimize) {
+    ht::OptimizeStats stats;
+    ht::optimize(tree, {}, &stats);
+    optimizer = ht::cli::optimizer_report(stats);
+  }
   const ht::Graph& g = tree.graph();
   std::vector<std::uint8_t> seen(g.size(), 0);
   collect(g, tree.root(), seen);
@@ -137,6 +145,7 @@ int cmd_info(const std::string& scene) {
   } catch (const ht::CompileError& e) {
     std::printf("tape           not compiled: %s\n", e.what());
   }
+  std::fputs(optimizer.c_str(), stdout);
   std::printf("load time      %.3f s\n", load_s);
   return 0;
 }
@@ -144,6 +153,7 @@ int cmd_info(const std::string& scene) {
 struct EvalArgs {
   std::string scene, points, output, engine = "tape";  // points, output: empty or "-" = stdin, stdout
   bool gradient = false;
+  bool optimize = true;
   int threads = 0;
 };
 
@@ -172,7 +182,7 @@ std::vector<double> evaluate(const ht::Tree& tree, const EvalArgs& a, std::span<
 }
 
 int cmd_eval(const EvalArgs& a) {
-  const ht::Tree loaded = ht::load_scene(a.scene);
+  const ht::Tree loaded = ht::cli::load_tree(a.scene, a.optimize);
   const ht::Tree tree = ready(loaded, ht::cli::default_precision(loaded, 0.0), a.scene);
   if (a.engine == "tape") {
     try {
@@ -202,6 +212,7 @@ struct MeshArgs {
   std::string sharp = "on", quality = "on";
   double precision = 0.0, memory_gib = 4.0;
   int threads = 0;
+  bool optimize = true;
 };
 
 // Ctrl-C asks the mesh plan to stop between jobs and bricks; it then throws MeshCancelled and
@@ -301,7 +312,7 @@ int cmd_mesh(const MeshArgs& a) {
     throw InputError(a.out + ": unsupported output extension (use .ply, .obj, .off or .stl)");
   using clock = std::chrono::steady_clock;
   const auto t0 = clock::now();
-  const ht::Tree loaded = ht::load_scene(a.scene);
+  const ht::Tree loaded = ht::cli::load_tree(a.scene, a.optimize);
   const double h = ht::cli::default_precision(loaded, a.precision);
   const ht::Tree& tree = loaded;
   const double load_s = std::chrono::duration<double>(clock::now() - t0).count();
@@ -436,6 +447,14 @@ int main(int argc, char** argv) {
 
   auto* info = app.add_subcommand("info", "Print what a scene holds: nodes, depth, bounds, meshes, bytes, load time");
   info->add_option("scene", scene, "Scene file (JSON, SCENE_FORMAT v1)")->required();
+  bool info_no_optimize = false;
+  info->add_flag("--no-optimize", info_no_optimize, "Do not run the optimizer (no optimizer lines)");
+
+  ht::cli::OptimizeArgs optimize_args;
+  auto* optimize_cmd = app.add_subcommand("optimize", "Rewrite a scene into the tree that evaluates and meshes fast (same field)");
+  optimize_cmd->add_option("scene", optimize_args.scene, "Scene file (JSON, SCENE_FORMAT v1)")->required();
+  optimize_cmd->add_option("-o,--output", optimize_args.out, "The rewritten scene (JSON, SCENE_FORMAT v1; - for stdout)")
+      ->required();
 
   EvalArgs eval_args;
   auto* eval = app.add_subcommand("eval", "Field values at points (x y z per line, or .npy) from --points or stdin");
@@ -449,6 +468,8 @@ int main(int argc, char** argv) {
   eval->add_option("--engine", eval_args.engine, "Evaluator: tape (compiled, float, SIMD; default) or tree (reference, double)")
       ->check(CLI::IsMember({"tape", "tree"}));
   eval->add_option("--threads", eval_args.threads, "Worker threads (default: all cores)")->check(CLI::Range(1, 1024));
+  bool eval_no_optimize = false;
+  eval->add_flag("--no-optimize", eval_no_optimize, "Evaluate the tree as written, not the optimized one");
 
   MeshArgs mesh_args;
   auto* mesh_cmd = app.add_subcommand("mesh", "Mesh the scene's surface into a closed triangle mesh");
@@ -461,6 +482,8 @@ int main(int argc, char** argv) {
                        "(default: the scene's mesher.strategy)")
       ->check(CLI::IsMember({"auto", "global", "local"}));
   mesh_cmd->add_option("--threads", mesh_args.threads, "Worker threads (default: all cores)")->check(CLI::Range(1, 1024));
+  bool mesh_no_optimize = false;
+  mesh_cmd->add_flag("--no-optimize", mesh_no_optimize, "Mesh the tree as written, not the optimized one");
   mesh_cmd->add_option("--stats-json", mesh_args.stats_json, "Write triangles, checks and seconds per stage to FILE");
   mesh_cmd->add_option("--memory-budget", mesh_args.memory_gib, "GiB the mesher may use (default 4)")->check(CLI::PositiveNumber);
   mesh_cmd->add_option("--sharp-features", mesh_args.sharp,
@@ -486,10 +509,12 @@ int main(int argc, char** argv) {
   std::uint64_t seed = 1;
   std::string generator;
   auto* generate = app.add_subcommand("generate", "Write a procedural scene as JSON to stdout");
-  generate->add_option("scene", generator, "Which scene: snake (blended curve primitives)")
+  generate->add_option("scene", generator,
+                       "Which scene: snake (blended curve primitives) or scatter (small primitives of every kind as "
+                       "a left-deep chain of binary blends in random order)")
       ->required()
-      ->check(CLI::IsMember({"snake"}));
-  generate->add_option("--count", count, "Number of primitives")->check(CLI::Range(1, 1000000));
+      ->check(CLI::IsMember({"snake", "scatter"}));
+  generate->add_option("--count", count, "Number of primitives (default: 250 for snake, 900 for scatter)")->check(CLI::Range(1, 1000000));
   generate->add_option("--seed", seed, "Random seed");
 
   try {
@@ -499,7 +524,10 @@ int main(int argc, char** argv) {
     return code == 0 ? 0 : 2;
   }
   try {
-    if (*info) return cmd_info(scene);
+    eval_args.optimize = !eval_no_optimize;
+    mesh_args.optimize = !mesh_no_optimize;
+    if (*info) return cmd_info(scene, !info_no_optimize);
+    if (*optimize_cmd) return ht::cli::cmd_optimize(optimize_args);
     if (*eval) {
       if (eval_args.threads == 0) return cmd_eval(eval_args);
       tbb::task_arena arena(eval_args.threads);
@@ -514,7 +542,14 @@ int main(int argc, char** argv) {
     }
     if (*render) return ht::cli::cmd_render(render_args);
     if (*generate) {
-      const std::string text = ht::scenes::snake_json(count, seed);
+      std::string text;
+      if (generator == "snake") {
+        text = ht::scenes::snake_json(count, seed);
+      } else {
+        ht::Builder b;
+        const ht::NodeId root = ht::scenes::scatter(b, generate->count("--count") ? count : 900, seed);
+        text = ht::write_scene_text(b.build(root), std::filesystem::current_path());
+      }
       std::fwrite(text.data(), 1, text.size(), stdout);
       return std::fflush(stdout) == 0 ? 0 : 1;
     }

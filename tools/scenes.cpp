@@ -3,6 +3,7 @@
 #include "nodes/mesh_leaf.hpp"
 
 #include <glm/geometric.hpp>
+#include <glm/gtc/matrix_transform.hpp>
 
 #include <cmath>
 #include <cstdio>
@@ -119,6 +120,39 @@ NodeId mesh_with_primitives(Builder& b, std::shared_ptr<const MeshLeaf> mesh) {
   const NodeId nest = b.point(c + glm::dvec3(0, 0.2 * h.y, 0.6 * h.z), {0.12 * size, -1.5});
   const NodeId ring = b.circle(c + glm::dvec3(0, 0, 1.1 * h.z), {0, 0, 1}, 0.5 * h.x, {0.06 * size, 1.0});
   return b.blend({leaf, perch, nest, ring});
+}
+
+NodeId scatter(Builder& b, int count, std::uint64_t seed) {
+  std::mt19937_64 rng(seed);
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  const double side = 1.6 * std::cbrt(static_cast<double>(count));
+  auto where = [&] { return glm::dvec3(unit(rng), unit(rng), unit(rng)) * side; };
+  auto offset = [&](double r) { return glm::dvec3(unit(rng) - 0.5, unit(rng) - 0.5, unit(rng) - 0.5) * (2.0 * r); };
+  NodeId chain = kNone;
+  for (int i = 0; i < count; ++i) {
+    const glm::dvec3 c = where();
+    const Falloff f{0.5 + 0.4 * unit(rng), 1.0};
+    NodeId p;
+    switch (i % 8) {
+      case 0: p = b.point(c, f); break;
+      case 1: p = b.segment(c, c + offset(0.6), f); break;
+      case 2: p = b.circle(c, offset(1.0) + glm::dvec3(0, 0, 0.1), 0.3, {0.3, 1.0}); break;
+      case 3: p = b.disc(c, offset(1.0) + glm::dvec3(0.1, 0, 0), 0.3, {0.3, 1.0}); break;
+      case 4: p = b.triangle(c, c + offset(0.5), c + offset(0.5), {0.35, 1.0}); break;
+      case 5: p = b.box(c, c + glm::dvec3(0.3, 0.4, 0.2), {0.3, 1.0}); break;
+      case 6: p = b.cylinder(c, c + offset(0.5) + glm::dvec3(0, 0.05, 0), 0.15, {0.3, 1.0}); break;
+      default: {
+        const std::vector<glm::dvec3> pts = {c, c + offset(0.4), c + offset(0.8)};
+        p = b.curve(pts, {0.35, 1.0});
+      }
+    }
+    if (i % 10 == 9) {  // built at the origin, put in place by a similarity
+      const glm::dmat4 turn = glm::rotate(glm::dmat4(1.0), 2.0 * std::numbers::pi * unit(rng), glm::normalize(offset(1.0) + glm::dvec3(0, 0, 0.01)));
+      p = b.affine(b.affine(p, glm::translate(glm::dmat4(1.0), -c)), glm::translate(glm::dmat4(1.0), c) * turn * glm::scale(glm::dmat4(1.0), glm::dvec3(0.9)));
+    }
+    chain = chain == kNone ? p : b.blend({chain, p});
+  }
+  return chain;
 }
 
 NodeId point_grid(Builder& b, int count) {

@@ -55,6 +55,16 @@ Axis axis(Rng& rng) { return static_cast<Axis>(pick(rng, 3)); }
 
 glm::dvec3 random_point(Rng& rng, double e) { return vec(rng, e); }
 
+const std::vector<std::shared_ptr<const MeshLeaf>>& small_meshes() {
+  static const auto meshes = [] {
+    std::vector<std::shared_ptr<const MeshLeaf>> m;
+    m.push_back(MeshLeaf::load(cgal_mesh("eight.off")));
+    m.push_back(MeshLeaf::load(cgal_mesh("sphere.off")));
+    return m;
+  }();
+  return meshes;
+}
+
 NodeId random_tree(Builder& b, Rng& rng, const RandomTreeOptions& o, int depth) {
   if (depth >= o.max_depth || pick(rng, 4) == 0) return primitive(b, rng, o);
   auto kids = [&](int min) {

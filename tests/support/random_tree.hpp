@@ -20,6 +20,10 @@ struct RandomTreeOptions {
 /// Builds a random subtree in b and returns its root. Shapes live in about [-2, 2]^3.
 NodeId random_tree(Builder& b, Rng& rng, const RandomTreeOptions& options, int depth = 0);
 
+/// eight.off and sphere.off as mesh leaves, loaded once for the process (what random trees
+/// with mesh leaves pick from).
+const std::vector<std::shared_ptr<const MeshLeaf>>& small_meshes();
+
 /// A random point in [-lo, lo]^3.
 glm::dvec3 random_point(Rng& rng, double extent);
 

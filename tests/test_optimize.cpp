@@ -1,0 +1,194 @@
+// The optimizer (runtime/optimize.hpp): on random trees (every kind but ffd, every Boolean mode,
+// nested warps, mesh leaves) and on the example scenes the optimized field equals the original
+// through both engines and after a round trip through the scene writer; meshes keep their
+// topology and volume; each rule fires where it should and says what it saved.
+#include "meshers/mesh_checks.hpp"
+#include "meshers/mesh_plan.hpp"
+#include "nodes/mesh_leaf.hpp"
+#include "runtime/builder.hpp"
+#include "runtime/optimize.hpp"
+#include "runtime/scene.hpp"
+#include "runtime/scene_write.hpp"
+#include "runtime/tape.hpp"
+#include "runtime/tape_eval.hpp"
+#include "runtime/tree_eval.hpp"
+#include "tests/support/random_tree.hpp"
+#include "tools/scenes.hpp"
+
+#include <glm/gtc/matrix_transform.hpp>
+#include <gtest/gtest.h>
+
+#include <filesystem>
+
+using namespace ht;
+using glm::dvec3;
+
+namespace {
+
+constexpr double kT = 0.5;
+
+bool near(double a, double b) { return std::abs(a - b) <= 1e-4 * std::max(1.0, std::abs(a)); }
+
+// The reference fields of two trees agree at points in `box` (and a margin around it); the
+// tapes too, but for rare points at a kink, where float rounding picks the other branch.
+void expect_same_field(const Tree& a, const Tree& b, const Aabb& box, test::Rng& rng, int count, const std::string& what) {
+  std::uniform_real_distribution<double> u(-0.1, 1.1);
+  std::vector<dvec3> pts(static_cast<std::size_t>(count));
+  for (auto& p : pts) p = box.lo + dvec3(u(rng), u(rng), u(rng)) * box.size();
+  std::vector<double> ra(pts.size()), rb(pts.size()), ta(pts.size()), tb(pts.size());
+  a.reference(pts, ra);
+  b.reference(pts, rb);
+  a.field(pts, ta);
+  b.field(pts, tb);
+  std::size_t tape_off = 0;
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    ASSERT_TRUE(near(ra[i], rb[i])) << what << " point " << pts[i].x << " " << pts[i].y << " " << pts[i].z << ": " << ra[i]
+                                    << " vs " << rb[i];
+    tape_off += near(ta[i], tb[i]) ? 0 : 1;
+  }
+  EXPECT_LE(tape_off, pts.size() / 500) << what;
+}
+
+Aabb solid_box(const Tree& t) {
+  Aabb box = t.graph().support(t.root(), false);
+  if (!box.finite()) box = {dvec3(-2.5), dvec3(2.5)};
+  return box;
+}
+
+}  // namespace
+
+TEST(Optimize, RandomTreesKeepTheirFieldThroughBothEnginesAndTheWriter) {
+  test::Rng rng(81);
+  test::RandomTreeOptions opt;
+  opt.meshes = test::small_meshes();
+  const auto dir = test::temp_dir("optimize-random");
+  for (int trial = 0; trial < 300; ++trial) {
+    SCOPED_TRACE(trial);
+    Builder b(kT);
+    const NodeId root = test::random_tree(b, rng, opt);
+    const Tree t = b.build(root);
+    OptimizeStats s;
+    const Tree o = optimize(t, {}, &s);
+    EXPECT_LE(s.nodes_after, 2 * s.nodes_before + 4);  // pushed warps copy themselves, a few at most
+    expect_same_field(t, o, solid_box(t), rng, 200, "optimized");
+    // The rewritten scene reads back into the same tree.
+    const Tree back = load_scene_text(write_scene_text(o, dir), dir, "round trip");
+    expect_same_field(o, back, solid_box(t), rng, 50, "round trip");
+    if (HasFatalFailure()) return;
+  }
+  std::filesystem::remove_all(dir);
+}
+
+TEST(Optimize, ExampleScenesKeepTheirFieldTopologyAndVolume) {
+  test::Rng rng(82);
+  const auto examples = std::filesystem::path(HYBRIDTREE_SOURCE_DIR) / "examples";
+  for (const char* name : {"bunny_ear.json", "bunny_garden.json", "carved_box.json", "winged_bunny.json"}) {
+    SCOPED_TRACE(name);
+    const Tree t = load_scene(examples / name);
+    const Tree o = optimize(t);
+    expect_same_field(t, o, solid_box(t), rng, 2000, name);
+    const double h = t.mesher_settings().precision;
+    const MeshChecks a = check_mesh(*mesh_tree(t, test::mesh_options(h)).mesh);
+    const MeshChecks c = check_mesh(*mesh_tree(o, test::mesh_options(h)).mesh);
+    EXPECT_TRUE(c.watertight());
+    EXPECT_EQ(c.components, a.components);
+    EXPECT_EQ(c.genus, a.genus);
+    EXPECT_NEAR(c.volume, a.volume, 0.005 * std::abs(a.volume));
+  }
+}
+
+TEST(Optimize, FlatteningMakesOneBlendOfAChain) {
+  Builder b(kT);
+  const NodeId chain = scenes::scatter(b, 200, 3);
+  const Tree t = b.build(chain);
+  OptimizeOptions flat_only;
+  flat_only.regroup = false;
+  OptimizeStats s;
+  const Tree o = optimize(t, flat_only, &s);
+  EXPECT_EQ(s.flattened, 198u);  // 199 binary blends, one left
+  EXPECT_EQ(o.graph().kind[o.root()], NodeKind::Blend);
+  EXPECT_EQ(o.graph().child_count[o.root()], 200u);
+  EXPECT_LT(s.nodes_after, s.nodes_before);
+}
+
+TEST(Optimize, RegroupingMakesGuardedGroupsAndFasterTapes) {
+  Builder b(kT);
+  const Tree t = b.build(scenes::scatter(b, 900, 1));
+  OptimizeStats s;
+  const Tree o = optimize(t, {}, &s);
+  EXPECT_GT(s.groups, 100u);
+  const Tape before = compile_tape(t.graph_ptr(), t.root(), kT), after = compile_tape(o.graph_ptr(), o.root(), kT);
+  EXPECT_LT(before.skips, 10u) << "random order: hardly a prefix of the chain is small";
+  EXPECT_GT(after.skips, 100u);
+  EXPECT_EQ(after.leaf_count(), before.leaf_count());
+  // The folded affines are instructions saved; the guards cost one each.
+  EXPECT_EQ(after.size() + s.affines_folded, before.size() - before.skips + after.skips);
+}
+
+TEST(Optimize, AffinesComposeFoldIntoPrimitivesAndPushDown) {
+  Builder b(kT);
+  const glm::dmat4 m = glm::rotate(glm::translate(glm::dmat4(1.0), {1, 2, 3}), 0.7, dvec3(1, 1, 0)) *
+                       glm::scale(glm::dmat4(1.0), dvec3(1.5));
+  const NodeId seg = b.affine(b.segment({0, 0, 0}, {1, 0, 0}, {0.5, 1.0}), m);
+  const NodeId twice = b.affine(b.affine(b.mesh(test::small_meshes()[0], {0.2, 1.0}), m), glm::translate(glm::dmat4(1.0), {0.5, 0, 0}));
+  const NodeId leaf = b.mesh(test::small_meshes()[1], {0.2, 1.0});
+  const NodeId pushed = b.affine(b.blend({leaf, b.point({0, 0, 0}, {0.6, 1.0})}), m);
+  const NodeId stretched = b.affine(b.box({0, 0, 0}, {1, 1, 1}, {0.3, 1.0}), glm::scale(glm::dmat4(1.0), dvec3(1, 2, 1)));
+  const Tree t = b.build(b.blend({seg, twice, pushed, stretched}));
+  OptimizeStats s;
+  const Tree o = optimize(t, {}, &s);
+  EXPECT_EQ(s.affines_composed, 1u);
+  EXPECT_GE(s.affines_folded, 2u);  // the segment, the point
+  EXPECT_EQ(s.warps_pushed, 1u);
+  std::size_t affines = 0;
+  for (NodeId n = 0; n < o.graph().size(); ++n) affines += o.graph().kind[n] == NodeKind::Affine;
+  EXPECT_EQ(affines, 3u);  // above each mesh leaf, and the box stretched unevenly
+  test::Rng rng(83);
+  expect_same_field(t, o, solid_box(t), rng, 4000, "affines");
+}
+
+TEST(Optimize, IdenticalSubtreesMergeAndZerosArePruned) {
+  Builder b(kT);
+  auto arm = [&] { return b.twist(b.blend({b.segment({0, 0, 0}, {1, 0, 0}, {0.4}), b.point({1, 0, 0}, {0.5})}), Axis::X, {0, 0, 0}, 0.3); };
+  // Disjoint non-negative operands: the intersection is 0 everywhere.
+  const NodeId never = b.intersect({b.point({5, 0, 0}, {0.5}), b.point({-5, 0, 0}, {0.5})}, BooleanMode::MinMax);
+  const NodeId missed = b.crop(b.point({0, 9, 0}, {0.5}), {-1, -1, -1}, {1, 1, 1});
+  const NodeId single = b.blend({b.point({0, -1, 0}, {0.5})});
+  const Tree t = b.build(b.blend({arm(), arm(), never, missed, single}));
+  OptimizeStats s;
+  const Tree o = optimize(t, {}, &s);
+  EXPECT_GE(s.merged, 3u);   // the second arm's segment, point, blend and twist
+  EXPECT_EQ(s.pruned, 2u);   // the intersection and the crop
+  EXPECT_GE(s.flattened, 1u);  // the one-child blend's term joins the root's
+  EXPECT_EQ(s.nodes_before, 16u);
+  EXPECT_LE(s.nodes_after, 7u);  // one arm (its twist pushed onto its two leaves), the single point, the root
+  test::Rng rng(84);
+  expect_same_field(t, o, Aabb{dvec3(-6), dvec3(6)}, rng, 4000, "merged and pruned");
+}
+
+TEST(Optimize, BooleansKeepTheirMeaningWhenTheyLeaveABlend) {
+  // union(auto) under a one-operand blend means R-functions; folding the blend away puts the
+  // union at the root, where auto would mean min/max: it must say rfunction.
+  Builder b(kT);
+  const NodeId u = b.unite({b.point({0, 0, 0}, {1.0}), b.point({0.8, 0, 0}, {1.0})});
+  const NodeId top = b.blend({u});
+  b.set_name(u, "u");
+  const Tree t = b.build(top);
+  OptimizeStats s;
+  const Tree o = optimize(t, {}, &s);
+  EXPECT_EQ(s.folded, 1u);
+  EXPECT_EQ(o.graph().kind[o.root()], NodeKind::Union);
+  EXPECT_EQ(o.graph().boolean[o.root()], BooleanMode::RFunction);
+  test::Rng rng(85);
+  expect_same_field(t, o, solid_box(t), rng, 2000, "context");
+  // And in a blend it stays auto.
+  Builder c(kT);
+  const NodeId v = c.unite({c.point({0, 0, 0}, {1.0}), c.point({0.8, 0, 0}, {1.0})});
+  const Tree t2 = c.build(c.blend({v, c.point({3, 0, 0}, {1.0})}));
+  const Tree o2 = optimize(t2);
+  for (NodeId n = 0; n < o2.graph().size(); ++n) {
+    if (o2.graph().kind[n] == NodeKind::Union) {
+      EXPECT_EQ(o2.graph().boolean[n], BooleanMode::Auto);
+    }
+  }
+}
