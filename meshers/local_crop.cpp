@@ -5,6 +5,7 @@
 #include "meshers/local_parts.hpp"
 #include "meshers/caps.hpp"
 #include "meshers/relax.hpp"
+#include "runtime/node_params.hpp"
 
 #include <glm/geometric.hpp>
 
@@ -17,7 +18,7 @@ using namespace local;
 
 TriangleMesh trim_crop(const LocalInput& in, LocalStats* stats) {
   LocalStats st;
-  const double* box6 = in.graph->params_of(in.node).data();
+  const double* box6 = params::crop(*in.graph, in.node).box6;
   const Aabb box{{box6[0], box6[1], box6[2]}, {box6[3], box6[4], box6[5]}};
   st.operand_triangles = operand(in, 0).triangles.size();
   TriangleMesh out = operand(in, 0);

@@ -5,6 +5,7 @@
 #include "nodes/operators.hpp"
 #include "nodes/primitives.hpp"
 #include "nodes/warps.hpp"
+#include "runtime/node_params.hpp"
 
 #include <cstring>
 
@@ -137,17 +138,20 @@ void compute_support(Graph& g, NodeId n) {
       Aabb box;
       switch (kind_family(k)) {
         case Family::Primitive:
-          box = skeleton_bounds(k, g.skeleton_of(n)).expanded(p[kPrimR]);
-          nonneg = p[kPrimF] > 0.0;
+          box = skeleton_bounds(k, g.skeleton_of(n)).expanded(params::primitive(g, n).R);
+          nonneg = params::primitive(g, n).F > 0.0;
           break;
-        case Family::Mesh:
-          box = g.meshes[g.mesh[n]]->bounds().expanded(p[0]);
-          nonneg = p[1] > 0.0;
+        case Family::Mesh: {
+          const params::MeshLeafParams m = params::mesh_leaf(g, n);
+          box = g.meshes[g.mesh[n]]->bounds().expanded(m.R);
+          nonneg = m.F > 0.0;
           break;
+        }
         case Family::Warp:
           if (k == NodeKind::Ffd) {  // its field lives on its deformed mesh, once meshed
-            box = g.mesh[n] != kNone ? g.meshes[g.mesh[n]]->bounds().expanded(p[9]) : Aabb::everything();
-            nonneg = p[10] > 0.0;
+            const params::Ffd f = params::ffd(g, n);
+            box = g.mesh[n] != kNone ? g.meshes[g.mesh[n]]->bounds().expanded(f.R) : Aabb::everything();
+            nonneg = f.F > 0.0;
           } else {
             box = warp_bounds(k, p.data(), sup(c[0], below));
           }
@@ -170,7 +174,8 @@ void compute_support(Graph& g, NodeId n) {
             box = merge(sup(c[0], below), sup(c[1], below));
             nonneg = g.nonnegative[c[0]] && g.nonnegative[c[1]];
           } else if (k == NodeKind::Crop) {
-            box = ht::intersect(sup(c[0], below), Aabb{{p[0], p[1], p[2]}, {p[3], p[4], p[5]}}.expanded(crop_reach(p.data())));
+            const params::Crop crop = params::crop(g, n);
+            box = ht::intersect(sup(c[0], below), crop.box.expanded(crop_reach(crop.box6)));
             nonneg = true;
           }
           break;

@@ -6,6 +6,7 @@
 #include "nodes/primitives.hpp"
 #include "nodes/warps.hpp"
 #include "runtime/interval.hpp"
+#include "runtime/node_params.hpp"
 #include "runtime/tape.hpp"
 
 #include <glm/geometric.hpp>
@@ -44,10 +45,7 @@ Interval primitive_interval(const Graph& g, NodeId n, const Aabb& box) {
 }
 
 Interval mesh_interval(const Graph& g, NodeId n, double T, const Aabb& box) {
-  const auto prm = g.params_of(n);
-  // A mesh leaf carries its field parameters; a prepared ffd carries R and F.
-  const MeshFieldParams mp = g.kind[n] == NodeKind::Ffd ? mesh_field_params(prm[9], prm[10], T)
-                                                         : MeshFieldParams{prm[0], prm[1], T, prm[2], prm[3], prm[4]};
+  const MeshFieldParams mp = params::mesh_field(g, n, T);
   const double F = mp.F, kernel = mp.kernel_radius, r0 = mp.r0, reach = mp.query_radius;
   if (ht::intersect(box, g.support_alone[n]).empty()) return {};
   if (!box.finite()) return either_sign(F);
@@ -99,7 +97,7 @@ namespace interval {
 
 Interval leaf(const Graph& g, NodeId n, double T, const Aabb& box) {
   if (g.kind[n] == NodeKind::Mesh) return mesh_interval(g, n, T, box);
-  if (g.kind[n] == NodeKind::Ffd) return g.mesh[n] != kNone ? mesh_interval(g, n, T, box) : either_sign(g.params_of(n)[10]);
+  if (g.kind[n] == NodeKind::Ffd) return g.mesh[n] != kNone ? mesh_interval(g, n, T, box) : either_sign(params::ffd(g, n).F);
   return primitive_interval(g, n, box);
 }
 
@@ -208,8 +206,7 @@ Aabb solid_bounds(const Graph& g, NodeId n, double T, bool under_blend) {
     }
     case NodeKind::Difference: return child(0, under_blend);  // f >= T needs f_A >= T
     case NodeKind::Crop: {
-      const auto p = g.params_of(n);
-      const Aabb box = ht::intersect(child(0, under_blend), Aabb{{p[0], p[1], p[2]}, {p[3], p[4], p[5]}});
+      const Aabb box = ht::intersect(child(0, under_blend), params::crop(g, n).box);
       return box.empty() ? Aabb{} : box;
     }
     case NodeKind::Affine:

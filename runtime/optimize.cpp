@@ -5,13 +5,15 @@
 
 #include "nodes/operators.hpp"
 #include "runtime/graph_writer.hpp"
+#include "runtime/node_params.hpp"
 #include "runtime/optimize_affine.hpp"
 #include "runtime/optimize_regroup.hpp"
 #include "runtime/tape.hpp"
 
+#include <tbb/parallel_invoke.h>
+
 #include <algorithm>
 #include <chrono>
-#include <map>
 #include <vector>
 
 namespace ht {
@@ -68,14 +70,10 @@ class Rewriter {
   bool plain_new(NodeId n) const { return plain(w_.graph(), n); }
 
   // -- warps ------------------------------------------------------------------------------
-  bool identity(NodeKind k, std::span<const double> p) const {
-    switch (k) {
-      case NodeKind::Affine: return optimize_detail::affine_is_identity(p);
-      case NodeKind::Twist: return p[4] == 0.0;
-      case NodeKind::Taper: return p[6] == 1.0 && p[7] == 1.0;
-      case NodeKind::Bend: return p[6] == 0.0;
-      default: return false;
-    }
+  // Whether the warp (kind k, parameters p, a node's pool slice) leaves every point in place.
+  static bool identity(NodeKind k, std::span<const double> p) {
+    if (k == NodeKind::Affine) return optimize_detail::affine_is_identity(p);
+    return params::barr_is_identity(k, params::barr(k, p));
   }
 
   std::size_t leaves(NodeId n) {  // of the new graph, memoized
@@ -319,9 +317,14 @@ Tree optimize(const Tree& tree, const OptimizeOptions& options, OptimizeStats* s
   auto [graph, new_root] = compact(rw.writer().graph(), root);
   auto shared = std::make_shared<const Graph>(std::move(graph));
   s.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  measure(tree.graph(), tree.root(), tree.threshold(), s.nodes_before, s.overlap_before, s.tape_before,
-          s.registers_before, tree.graph_ptr());
-  measure(*shared, new_root, tree.threshold(), s.nodes_after, s.overlap_after, s.tape_after, s.registers_after, shared);
+  tbb::parallel_invoke(
+      [&] {
+        measure(tree.graph(), tree.root(), tree.threshold(), s.nodes_before, s.overlap_before, s.tape_before,
+                s.registers_before, tree.graph_ptr());
+      },
+      [&, root = new_root] {
+        measure(*shared, root, tree.threshold(), s.nodes_after, s.overlap_after, s.tape_after, s.registers_after, shared);
+      });
   return Tree(shared, new_root, tree.threshold(), tree.mesher_settings());
 }
 

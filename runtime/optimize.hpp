@@ -21,8 +21,9 @@
 // is resolved where the node was, and written back as `auto` only where it means the same in
 // every place the node ends up.
 //
-// Thread-safe: optimize() reads the tree and writes a new graph; regrouping runs as TBB tasks,
-// and the result is the same at any thread count.
+// Thread-safe: optimize() reads the tree and writes a new graph. The rewriting walk is one
+// linear pass on the calling thread; regrouping large operand sets splits them as TBB tasks, and
+// the before/after measurements run side by side. The result is the same at any thread count.
 #pragma once
 
 #include "runtime/tree.hpp"

@@ -3,6 +3,7 @@
 #include "nodes/mesh_leaf.hpp"
 #include "nodes/primitives.hpp"
 #include "nodes/warps.hpp"
+#include "runtime/node_params.hpp"
 
 #include <nlohmann/json.hpp>
 
@@ -30,10 +31,10 @@ class Writer {
     if (g_.name[n] != kNone) j["name"] = g_.names[g_.name[n]];
     const auto p = g_.params_of(n);
     switch (kind_family(k)) {
-      case Family::Primitive: primitive(k, p.data(), j); break;
-      case Family::Mesh: mesh(n, p.data(), j); break;
+      case Family::Primitive: primitive(n, j); break;
+      case Family::Mesh: mesh(n, j); break;
       case Family::Warp: warp(n, p.data(), j); break;
-      case Family::Operator: operation(n, p.data(), j); break;
+      case Family::Operator: operation(n, j); break;
     }
     if ((kind_family(k) == Family::Operator || kind_family(k) == Family::Warp) && g_.mesher[n] != MesherHint::Auto)
       j["mesher"] = hint_name(g_.mesher[n]);
@@ -41,10 +42,12 @@ class Writer {
   }
 
  private:
-  static void primitive(NodeKind k, const double* p, json& j) {
-    j["radius"] = p[kPrimR];
-    j["strength"] = p[kPrimF];
-    const double* s = p + kPrimSkeleton;
+  void primitive(NodeId n, json& j) const {
+    const NodeKind k = g_.kind[n];
+    const params::Primitive prim = params::primitive(g_, n);
+    j["radius"] = prim.R;
+    j["strength"] = prim.F;
+    const double* s = prim.skeleton;
     switch (k) {
       case NodeKind::Point: j["center"] = vec3(s); break;
       case NodeKind::Segment: j["a"] = vec3(s), j["b"] = vec3(s + 3); break;
@@ -63,7 +66,7 @@ class Writer {
     }
   }
 
-  void mesh(NodeId n, const double* p, json& j) const {
+  void mesh(NodeId n, json& j) const {
     const MeshLeaf& leaf = *g_.meshes[g_.mesh[n]];
     if (leaf.file().empty())
       throw SceneWriteError("mesh leaf " + g_.label(n) + " (" + leaf.name() + ") was made in memory: it has no file to name");
@@ -72,8 +75,9 @@ class Writer {
     const std::filesystem::path dir = std::filesystem::absolute(dir_, ec).lexically_normal();
     const std::filesystem::path rel = file.lexically_relative(dir);
     j["file"] = (rel.empty() ? file : rel).generic_string();
-    j["radius"] = p[0];
-    j["strength"] = p[1];
+    const params::MeshLeafParams m = params::mesh_leaf(g_, n);
+    j["radius"] = m.R;
+    j["strength"] = m.F;
     if (leaf.inside_mode() == MeshInside::Winding) j["inside"] = "winding";
     if (leaf.repair_requested()) j["repair"] = true;
   }
@@ -89,32 +93,42 @@ class Writer {
         j["matrix"] = std::move(rows);
         break;
       }
-      case NodeKind::Twist: j["axis"] = axis_name(p[0]), j["center"] = vec3(p + 1), j["rate"] = p[4]; break;
-      case NodeKind::Taper:
-        j["axis"] = axis_name(p[0]), j["center"] = vec3(p + 1);
-        j["range"] = json::array({p[4], p[5]}), j["scale"] = json::array({p[6], p[7]});
+      case NodeKind::Twist: {
+        const params::Barr b = params::barr(g_, n);
+        j["axis"] = axis_name(b.axis), j["center"] = vec3(&b.center.x), j["rate"] = b.rate;
         break;
-      case NodeKind::Bend:
-        j["axis"] = axis_name(p[0]), j["center"] = vec3(p + 1), j["range"] = json::array({p[4], p[5]}), j["rate"] = p[6];
+      }
+      case NodeKind::Taper: {
+        const params::Barr b = params::barr(g_, n);
+        j["axis"] = axis_name(b.axis), j["center"] = vec3(&b.center.x);
+        j["range"] = json::array({b.h0, b.h1}), j["scale"] = json::array({b.s0, b.s1});
         break;
-      default: {  // ffd: min max l m n radius strength, then the control points
-        j["min"] = vec3(p), j["max"] = vec3(p + 3);
-        j["dims"] = json::array({static_cast<int>(p[6]), static_cast<int>(p[7]), static_cast<int>(p[8])});
-        j["radius"] = p[9], j["strength"] = p[10];
-        const std::size_t count = (g_.param_count[n] - kFfdHeader) / 3;
+      }
+      case NodeKind::Bend: {
+        const params::Barr b = params::barr(g_, n);
+        j["axis"] = axis_name(b.axis), j["center"] = vec3(&b.center.x);
+        j["range"] = json::array({b.h0, b.h1}), j["rate"] = b.rate;
+        break;
+      }
+      default: {
+        const params::Ffd f = params::ffd(g_, n);
+        j["min"] = vec3(&f.lattice.lo.x), j["max"] = vec3(&f.lattice.hi.x);
+        j["dims"] = json::array({f.l, f.m, f.n});
+        j["radius"] = f.R, j["strength"] = f.F;
         json pts = json::array();
-        for (std::size_t i = 0; i < count; ++i) pts.push_back(vec3(p + kFfdHeader + 3 * i));
+        for (std::size_t i = 0; i + 2 < f.points.size(); i += 3) pts.push_back(vec3(f.points.data() + i));
         j["points"] = std::move(pts);
       }
     }
   }
 
-  void operation(NodeId n, const double* p, json& j) const {
+  void operation(NodeId n, json& j) const {
     const NodeKind k = g_.kind[n];
     const auto c = g_.children_of(n);
     if (k == NodeKind::Crop) {
+      const params::Crop crop = params::crop(g_, n);
       j["child"] = node(c[0]);
-      j["min"] = vec3(p), j["max"] = vec3(p + 3);
+      j["min"] = vec3(&crop.box.lo.x), j["max"] = vec3(&crop.box.hi.x);
       return;
     }
     if (k == NodeKind::LocalBlend) {

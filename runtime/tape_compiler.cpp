@@ -6,6 +6,7 @@
 #include "nodes/primitives.hpp"
 #include "nodes/warps.hpp"
 #include "runtime/interval.hpp"
+#include "runtime/node_params.hpp"
 #include "runtime/tape.hpp"
 
 #include <glm/geometric.hpp>
@@ -201,8 +202,8 @@ class Compiler {
 
   // -- leaves -----------------------------------------------------------------------------
   int primitive(NodeId n, int frame) {
-    const auto p = g_.params_of(n);
-    const double R = p[kPrimR], F = p[kPrimF];
+    const params::Primitive prim = params::primitive(g_, n);
+    const double R = prim.R, F = prim.F;
     const double* s = g_.skeleton_of(n);
     // Common header: R^2, 1/R^2, F, R; the skeleton follows (layouts in runtime/tape_ops.hpp).
     const std::uint32_t k = constants({R * R, 1.0 / (R * R), F, R});
@@ -312,9 +313,7 @@ class Compiler {
   }
 
   int mesh(NodeId n, int frame) {
-    const auto prm = g_.params_of(n);
-    const MeshFieldParams mp = g_.kind[n] == NodeKind::Ffd ? mesh_field_params(prm[9], prm[10], T_)
-                                                            : MeshFieldParams{prm[0], prm[1], T_, prm[2], prm[3], prm[4]};
+    const MeshFieldParams mp = params::mesh_field(g_, n, T_);
     const MeshLeaf* leaf = g_.meshes[g_.mesh[n]].get();
     auto it = std::find(tape_.meshes.begin(), tape_.meshes.end(), leaf);
     const auto index = static_cast<int>(it - tape_.meshes.begin());
@@ -493,13 +492,12 @@ class Compiler {
   }
 
   int crop(NodeId n, int frame, bool under_blend, const Aabb* region, int depth) {
-    const auto p = g_.params_of(n);
+    const params::Crop c = params::crop(g_, n);
     const int child = node(g_.children_of(n)[0], frame, under_blend, region, depth + 1);
     if (child == kNoValue) return kNoValue;
-    const glm::dvec3 lo(p[0], p[1], p[2]), hi(p[3], p[4], p[5]);
-    const glm::dvec3 centre = 0.5 * (lo + hi), half = 0.5 * (hi - lo);
+    const glm::dvec3 centre = c.box.center(), half = 0.5 * c.box.size();
     const std::uint32_t k =
-        constants({centre.x, centre.y, centre.z, half.x, half.y, half.z, T_ / crop_reach(p.data()), T_});
+        constants({centre.x, centre.y, centre.z, half.x, half.y, half.z, T_ / crop_reach(c.box6), T_});
     emit_k(OpCode::Crop, n, child, frame, k);  // in place
     return child;
   }

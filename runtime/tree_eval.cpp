@@ -4,6 +4,7 @@
 #include "nodes/operators.hpp"
 #include "nodes/primitives.hpp"
 #include "nodes/warps.hpp"
+#include "runtime/node_params.hpp"
 #include "runtime/tape.hpp"
 #include "runtime/tape_eval.hpp"
 #include "runtime/tree.hpp"
@@ -20,7 +21,6 @@
 namespace ht {
 
 namespace {
-MeshFieldParams leaf_params(std::span<const double> prm, double T);
 }  // namespace
 
 double reference_field(const Graph& g, NodeId n, double T, const glm::dvec3& p, bool under_blend) {
@@ -32,7 +32,7 @@ double reference_field(const Graph& g, NodeId n, double T, const glm::dvec3& p, 
     return reference_field(g, c[i], T, q, blended);
   };
   switch (k) {
-    case NodeKind::Mesh: return mesh_field(*g.meshes[g.mesh[n]], leaf_params(prm, T), p);
+    case NodeKind::Mesh: return mesh_field(*g.meshes[g.mesh[n]], params::mesh_field(g, n, T), p);
     case NodeKind::Blend: {
       double sum = 0.0;
       for (std::size_t i = 0; i < c.size(); ++i) sum += child(i, p, true);
@@ -63,7 +63,7 @@ double reference_field(const Graph& g, NodeId n, double T, const glm::dvec3& p, 
       if (g.mesh[n] == kNone)
         throw EvalError("ffd node " + g.label(n) +
                         ": its field is the distance to its deformed mesh, which needs meshing first (meshers/ffd.hpp)");
-      return mesh_field(*g.meshes[g.mesh[n]], mesh_field_params(prm[9], prm[10], T), p);
+      return mesh_field(*g.meshes[g.mesh[n]], params::mesh_field(g, n, T), p);
     default:  // skeletal primitives
       return falloff(skeleton_distance(k, g.skeleton_of(n), p), prm[kPrimR], prm[kPrimF]);
   }
@@ -114,17 +114,6 @@ ValueGradient combine(Fn&& h, const std::array<ValueGradient, N>& in) {
   return out;
 }
 
-MeshFieldParams leaf_params(std::span<const double> prm, double T) {
-  MeshFieldParams m;
-  m.R = prm[0];
-  m.F = prm[1];
-  m.T = T;
-  m.kernel_radius = prm[2];
-  m.r0 = prm[3];
-  m.query_radius = prm[4];
-  return m;
-}
-
 ValueGradient value_gradient(const Graph& g, NodeId n, double T, const glm::dvec3& p, bool under_blend);
 
 ValueGradient boolean_value_gradient(const Graph& g, NodeId n, double T, const glm::dvec3& p, bool under_blend) {
@@ -151,12 +140,12 @@ ValueGradient value_gradient(const Graph& g, NodeId n, double T, const glm::dvec
   auto child = [&](std::size_t i, const glm::dvec3& q, bool blended) { return value_gradient(g, c[i], T, q, blended); };
   switch (k) {
     case NodeKind::Mesh: {
-      const MeshFieldSample s = mesh_field_gradient(*g.meshes[g.mesh[n]], leaf_params(prm, T), p);
+      const MeshFieldSample s = mesh_field_gradient(*g.meshes[g.mesh[n]], params::mesh_field(g, n, T), p);
       return {s.value, s.gradient};
     }
     case NodeKind::Ffd: {
       if (g.mesh[n] == kNone) return {reference_field(g, n, T, p, under_blend), glm::dvec3(0.0)};  // throws
-      const MeshFieldSample s = mesh_field_gradient(*g.meshes[g.mesh[n]], mesh_field_params(prm[9], prm[10], T), p);
+      const MeshFieldSample s = mesh_field_gradient(*g.meshes[g.mesh[n]], params::mesh_field(g, n, T), p);
       return {s.value, s.gradient};
     }
     case NodeKind::Blend: {
