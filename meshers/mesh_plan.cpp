@@ -132,7 +132,7 @@ class Planner {
       case Family::Warp: return set(JobStrategy::WarpedChild, why);
       case Family::Operator: break;
     }
-    const std::size_t operands = g_.child_count[n];
+    const std::size_t operands = flat_operands(n);
     switch (kind) {
       case NodeKind::Blend: {
         j.rho = blend_overlap(g_, n);
@@ -150,6 +150,20 @@ class Planner {
       case NodeKind::LocalBlend: return set(JobStrategy::TrimLocalBlend, why);
       default: return set(JobStrategy::Global, JobReason::NoLocalMethod);
     }
+  }
+
+  // The operands of n counted through nested plain nodes of its kind and mode (no name, no
+  // hint): the groups the optimizer makes of a big blend or union (runtime/optimize.hpp) are an
+  // evaluation detail, and the blend of 250 curves stays one for its strategy.
+  std::size_t flat_operands(NodeId n) const {
+    if (g_.kind[n] != NodeKind::Blend && g_.kind[n] != NodeKind::Union) return g_.child_count[n];
+    std::size_t count = 0;
+    for (NodeId c : g_.children_of(n)) {
+      const bool group = g_.kind[c] == g_.kind[n] && g_.boolean[c] == g_.boolean[n] && g_.name[c] == kNone &&
+                         g_.mesher[c] == MesherHint::Auto;
+      count += group ? flat_operands(c) : 1;
+    }
+    return count;
   }
 
   const Graph& g_;

@@ -241,3 +241,21 @@ TEST(Optimize, CommandLineWritesTheRewrittenSceneAndEvaluatesTheSame) {
   EXPECT_FALSE(std::filesystem::exists(dir / "none.json"));
   std::filesystem::remove_all(dir);
 }
+
+TEST(Optimize, GroupsDoNotChangeTheMeshPlan) {
+  // The 250-curve snake is one blend of 250 operands: polygonized whole. Regrouped into blends of
+  // 4, the plan still counts 250 (meshers/mesh_plan.cpp), so the job and the mesh stay the same.
+  Builder b(kT);
+  const Tree t = b.build(scenes::snake(b, 250, 1));
+  OptimizeStats s;
+  const Tree o = optimize(t, {}, &s);
+  ASSERT_GT(s.groups, 10u);
+  const MeshResult a = mesh_tree(t, test::mesh_options(0.15)), c = mesh_tree(o, test::mesh_options(0.15));
+  ASSERT_EQ(a.nodes.size(), 1u);
+  ASSERT_EQ(c.nodes.size(), 1u);
+  EXPECT_EQ(c.nodes[0].strategy, JobStrategy::Global);
+  EXPECT_EQ(c.nodes[0].reason, JobReason::NoLocalMethod);
+  const MeshChecks ca = check_mesh(*a.mesh), cc = check_mesh(*c.mesh);
+  EXPECT_EQ(cc.genus, ca.genus);
+  EXPECT_NEAR(cc.volume, ca.volume, 1e-3 * ca.volume);
+}
