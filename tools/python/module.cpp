@@ -92,8 +92,9 @@ py::array_t<double> gradient(const Tree& tree, const py::handle& points, int thr
   return to_numpy(std::move(g), 3);
 }
 
-// The run's progress goes to `callback` (when given) with the GIL held; Ctrl-C, a callback that
-// raises or returns False cancel the run, and what stopped it is raised once the run is back.
+// The run's progress goes to `callback` (when given) with the GIL held; a callback that raises or
+// returns False cancels the run, and so does Ctrl-C when a report runs on the main thread (Python
+// only sees signals there); what stopped it is raised once the run is back.
 struct Progress {
   py::object callback;
   std::atomic<bool> cancel{false};
