@@ -342,13 +342,13 @@ Tree load_scene_text(const std::string& text, const std::filesystem::path& base_
     std::string why = e.what();
     const auto at = why.find("parse error");
     if (at != std::string::npos) why = why.substr(at);
-    throw SceneError(source + ": not valid JSON: " + why);
+    throw SceneError(source, source + ": not valid JSON: " + why);
   } catch (const json::exception& e) {
     // A number too large for a double ("1e999"): the parser stops before any path is known.
     std::string why = e.what();
     const auto at = why.find("] ");
     if (at != std::string::npos) why = why.substr(at + 2);
-    throw SceneError(source + ": not valid JSON: " + why + " (every number must be finite)");
+    throw SceneError(source, source + ": not valid JSON: " + why + " (every number must be finite)");
   }
   try {
     Obj top(doc, "");
@@ -366,16 +366,16 @@ Tree load_scene_text(const std::string& text, const std::filesystem::path& base_
     top.finish();
     return b.build(root);
   } catch (const Fail& f) {
-    throw SceneError(source + ": " + shorten_path(f.path) + ": " + f.rule);
+    throw SceneError(source, shorten_path(f.path), f.rule);
   }
 }
 
 Tree load_scene(const std::filesystem::path& file) {
   std::ifstream in(file, std::ios::binary);
-  if (!in) throw SceneError(file.string() + ": cannot open the scene file");
+  if (!in) throw SceneError(file.string(), file.string() + ": cannot open the scene file");
   std::stringstream s;
   s << in.rdbuf();
-  if (in.bad()) throw SceneError(file.string() + ": cannot read the scene file");
+  if (in.bad()) throw SceneError(file.string(), file.string() + ": cannot read the scene file");
   return load_scene_text(s.str(), file.parent_path(), file.string());
 }
 

@@ -13,7 +13,13 @@
 namespace ht {
 
 struct SceneError : std::runtime_error {
-  using std::runtime_error::runtime_error;
+  /// A whole-file failure (cannot open, not JSON): the message starts with `source`.
+  SceneError(std::string source_, const std::string& message) : std::runtime_error(message), source(std::move(source_)) {}
+  /// A rule broken at a JSON path: "source: path: rule".
+  SceneError(std::string source_, std::string path_, const std::string& rule)
+      : std::runtime_error(source_ + ": " + path_ + ": " + rule), source(std::move(source_)), path(std::move(path_)) {}
+  std::string source;  ///< the scene file, or the name given to load_scene_text
+  std::string path;    ///< the JSON path ("root.children[2].radius"); empty for whole-file failures
 };
 
 /// Loads a scene file; relative mesh paths are resolved against the file's folder.

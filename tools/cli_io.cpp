@@ -81,11 +81,4 @@ void write_file_atomically(const std::string& file, std::string_view bytes, cons
   }
 }
 
-double default_precision(const Tree& tree, double requested) {
-  if (requested > 0) return requested;
-  if (tree.mesher_settings().precision > 0) return tree.mesher_settings().precision;
-  const Aabb solid = solid_bounds(tree.graph(), tree.root(), tree.threshold());
-  return solid.finite() ? std::max(glm::length(solid.size()) / 100.0, 1e-9) : 1.0;
-}
-
 }  // namespace ht::cli

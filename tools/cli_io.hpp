@@ -35,10 +35,6 @@ npy::Points read_points(const std::string& file);
 /// give back a float exactly). table.size() is a multiple of columns.
 std::string format_rows(std::span<const double> table, std::size_t columns);
 
-/// The precision a scene asks for: `requested` when > 0, else the scene's mesher.precision, else
-/// 1/100 of its solid's size (1 for an unbounded or empty solid).
-double default_precision(const Tree& tree, double requested);
-
 /// Writes `bytes` to a temporary file beside `file`, then renames it into place, so a failure
 /// never leaves a half-written `file` (nor the temporary). Throws InputError naming `file` and
 /// `what` ("stats file") when the folder is missing or not writable.

@@ -8,8 +8,8 @@
 #include "meshers/mesh_checks.hpp"
 #include "meshers/mesh_io.hpp"
 #include "meshers/mesh_plan.hpp"
+#include "meshers/mesh_run.hpp"
 #include "meshers/polygonize.hpp"
-#include "meshers/surface_field.hpp"
 #include "nodes/mesh_leaf.hpp"
 #include "runtime/scene.hpp"
 #include "runtime/scene_write.hpp"
@@ -23,7 +23,6 @@
 #include "tools/scenes.hpp"
 
 #include <CLI/CLI.hpp>
-#include <nlohmann/json.hpp>
 #include <tbb/global_control.h>
 #include <tbb/task_arena.h>
 #include <unistd.h>
@@ -183,7 +182,7 @@ std::vector<double> evaluate(const ht::Tree& tree, const EvalArgs& a, std::span<
 
 int cmd_eval(const EvalArgs& a) {
   const ht::Tree loaded = ht::cli::load_tree(a.scene, a.optimize);
-  const ht::Tree tree = ready(loaded, ht::cli::default_precision(loaded, 0.0), a.scene);
+  const ht::Tree tree = ready(loaded, ht::default_precision(loaded, 0.0), a.scene);
   if (a.engine == "tape") {
     try {
       tree.evaluator();
@@ -232,111 +231,25 @@ std::function<void(double)> progress_bar() {
   };
 }
 
-// "trim blend", or "global (fallback: ...)" for the root's job.
-std::string root_strategy(const ht::MeshResult& r, ht::NodeId root) {
-  for (const ht::NodeReport& e : r.nodes)
-    if (e.node == root) return std::string(ht::to_string(e.strategy)) + " (" + ht::to_string(e.reason) + ")";
-  return "?";
-}
-
-nlohmann::json node_json(const ht::Graph& g, const ht::NodeReport& e) {
-  nlohmann::json n = {{"node", g.label(e.node)},
-                      {"id", e.node},
-                      {"kind", std::string(ht::kind_name(g.kind[e.node]))},
-                      {"strategy", ht::to_string(e.strategy)},
-                      {"reason", ht::to_string(e.reason)},
-                      {"triangles", e.triangles},
-                      {"seconds", e.seconds}};
-  if (e.rho >= 0) n["rho"] = e.rho;
-  if (!e.fallback_cause.empty()) n["fallback_cause"] = e.fallback_cause;
-  if (e.polygonized) {
-    n["bricks"] = {{"total", e.polygonize.bricks_total}, {"active", e.polygonize.bricks_active},
-                   {"points_evaluated", e.polygonize.points_evaluated}};
-    n["quality"] = {{"collapses", e.polygonize.quality.collapses}, {"flips", e.polygonize.quality.flips},
-                    {"moved", e.polygonize.quality.moved}, {"seconds", e.polygonize.quality.seconds}};
-  }
-  if (e.strategy == ht::JobStrategy::TrimBlend || e.strategy == ht::JobStrategy::TrimBoolean ||
-      e.strategy == ht::JobStrategy::TrimCrop || e.strategy == ht::JobStrategy::TrimLocalBlend)
-    n["local"] = {{"operand_triangles", e.local.operand_triangles},
-                  {"kept_triangles", e.local.kept_triangles},
-                  {"patch_triangles", e.local.patch_triangles},
-                  {"stitch_welded", e.local.stitch.welded},
-                  {"stitch_inserted", e.local.stitch.inserted},
-                  {"stitch_largest_gap", e.local.stitch.largest_gap},
-                  {"band_loops", e.local.bridge.loops},
-                  {"band_triangles", e.local.bridge.band_triangles},
-                  {"band_widest", e.local.bridge.widest},
-                  {"self_intersections", e.local.self_intersections}};
-  if (e.edges_split) n["edges_split"] = e.edges_split;
-  return n;
-}
-
-// The polygonizer's statistics summed over every job that ran it.
-ht::PolygonizeStats total_polygonize(const ht::MeshResult& r) {
-  ht::PolygonizeStats s;
-  for (const ht::NodeReport& e : r.nodes) {
-    if (!e.polygonized) continue;
-    const ht::PolygonizeStats& p = e.polygonize;
-    s.bricks_total += p.bricks_total;
-    s.bricks_active += p.bricks_active;
-    s.points_evaluated += p.points_evaluated;
-    s.crease_edges += p.crease_edges;
-    s.corner_vertices += p.corner_vertices;
-    s.crease_intersections += p.crease_intersections;
-    s.unfold.pairs_before += p.unfold.pairs_before;
-    s.unfold.pairs_after += p.unfold.pairs_after;
-    s.unfold.collapses += p.unfold.collapses;
-    s.unfold.seconds += p.unfold.seconds;
-    s.snap.merged_vertices += p.snap.merged_vertices;
-    s.snap.removed_triangles += p.snap.removed_triangles;
-    s.snap.skipped_points += p.snap.skipped_points;
-    s.snap.crease_points += p.snap.crease_points;
-    s.seconds_classify += p.seconds_classify;
-    s.seconds_sample += p.seconds_sample;
-    s.seconds_extract += p.seconds_extract;
-    s.seconds_merge += p.seconds_merge;
-    s.seconds_features += p.seconds_features;
-    s.quality.collapses += p.quality.collapses;
-    s.quality.flips += p.quality.flips;
-    s.quality.splits += p.quality.splits;
-    s.quality.moved += p.quality.moved;
-    s.quality.reverted += p.quality.reverted;
-    s.quality.skipped |= p.quality.skipped;
-    s.quality.seconds += p.quality.seconds;
-  }
-  return s;
-}
-
 int cmd_mesh(const MeshArgs& a) {
   if (!ht::supported_mesh_extension(a.out))
     throw InputError(a.out + ": unsupported output extension (use .ply, .obj, .off or .stl)");
   using clock = std::chrono::steady_clock;
   const auto t0 = clock::now();
-  const ht::Tree loaded = ht::cli::load_tree(a.scene, a.optimize);
-  const double h = ht::cli::default_precision(loaded, a.precision);
-  const ht::Tree& tree = loaded;
+  const ht::Tree tree = ht::cli::load_tree(a.scene, a.optimize);
   const double load_s = std::chrono::duration<double>(clock::now() - t0).count();
-  ht::MeshOptions options;
-  options.precision = h;
-  options.polygonize.memory_budget = static_cast<std::size_t>(a.memory_gib * double(1u << 30));
-  options.polygonize.sharp_features = a.sharp == "on";
-  options.polygonize.quality.enabled = a.quality == "on";
-  options.blend_overlap = tree.mesher_settings().blend_overlap;
+  ht::MeshRunOptions options;
+  options.precision = a.precision;
+  options.strategy = a.strategy;
+  options.memory_gib = a.memory_gib;
+  options.sharp_features = a.sharp == "on";
+  options.quality = a.quality == "on";
   options.progress = progress_bar();
   options.cancel = &interrupted;
   std::signal(SIGINT, on_interrupt);
-  std::string strategy_name = a.strategy;
-  if (strategy_name.empty())
-    strategy_name = tree.mesher_settings().strategy == ht::MesherHint::Global  ? "global"
-                    : tree.mesher_settings().strategy == ht::MesherHint::Local ? "local"
-                                                                                : "auto";
-  options.strategy = strategy_name == "global" ? ht::MeshStrategy::Global
-                     : strategy_name == "local" ? ht::MeshStrategy::Local
-                                                : ht::MeshStrategy::Auto;
-  const auto t1 = clock::now();
-  ht::MeshResult result;
+  ht::MeshRun run;
   try {
-    result = ht::mesh_tree(tree, options);
+    run = ht::run_mesh(tree, options);
   } catch (const ht::MeshCancelled&) {
     throw std::runtime_error(a.scene + ": interrupted; nothing was written");
   } catch (const ht::CompileError& e) {
@@ -346,87 +259,19 @@ int cmd_mesh(const MeshArgs& a) {
   } catch (const ht::MemoryBudgetError& e) {
     throw InputError(a.scene + ": " + e.what() + "; raise --memory-budget (GiB) or coarsen --precision");
   }
-  const ht::TriangleMesh& mesh = *result.mesh;
-  const double mesh_s = std::chrono::duration<double>(clock::now() - t1).count();
+  const ht::TriangleMesh& mesh = *run.result.mesh;
+  const ht::MeshChecks& checks = run.checks;
   if (mesh.triangles.empty()) std::fprintf(stderr, "hybridtree: warning: %s: the surface is empty; writing an empty mesh\n", a.scene.c_str());
-  const auto t2 = clock::now();
-  ht::MeshChecks checks = ht::check_mesh(mesh);
-  if (!mesh.triangles.empty()) {
-    // On tapes specialized to bricks of eight cells, as the polygonizer's: a big tree's root tape
-    // would pay for every primitive at each of the vertices and face centres.
-    ht::SurfaceField field(result.tree->graph_ptr(), result.tree->root(), tree.threshold(), mesh.positions.front(), 8.0 * h);
-    ht::measure_surface_error(mesh, field, checks);
-  }
-  const double check_s = std::chrono::duration<double>(clock::now() - t2).count();
   const auto t3 = clock::now();
   ht::write_mesh(mesh, a.out);
   const double write_s = std::chrono::duration<double>(clock::now() - t3).count();
   std::printf("%s: %zu triangles, %zu vertices, precision %g, %.3f s meshing (%s at the root), %s, genus %ld\n",
-              a.out.c_str(), checks.triangles, checks.vertices, h, mesh_s, root_strategy(result, tree.root()).c_str(),
-              checks.watertight() ? "closed manifold" : "NOT watertight", checks.genus);
-  if (!a.stats_json.empty()) {
-    nlohmann::json j;
-    j["scene"] = a.scene;
-    j["output"] = a.out;
-    j["precision"] = h;
-    j["strategy"] = strategy_name;
-    nlohmann::json nodes = nlohmann::json::array();
-    for (const ht::NodeReport& e : result.nodes) nodes.push_back(node_json(tree.graph(), e));
-    j["nodes"] = nodes;
-    j["triangles"] = checks.triangles;
-    j["vertices"] = checks.vertices;
-    j["checks"] = {{"closed", checks.closed()},
-                   {"manifold", checks.manifold()},
-                   {"oriented", checks.oriented()},
-                   {"watertight", checks.watertight()},
-                   {"boundary_edges", checks.boundary_edges},
-                   {"nonmanifold_edges", checks.nonmanifold_edges},
-                   {"nonmanifold_vertices", checks.nonmanifold_vertices},
-                   {"misoriented_edges", checks.misoriented_edges},
-                   {"degenerate_triangles", checks.degenerate_triangles},
-                   {"components", checks.components},
-                   {"euler_characteristic", checks.euler},
-                   {"genus", checks.genus},
-                   {"area", checks.area},
-                   {"volume", checks.volume},
-                   {"min_angle_degrees", checks.min_angle},
-                   {"min_angle_p1_degrees", checks.min_angle_p1},
-                   {"min_angle_histogram_10deg", checks.min_angle_histogram},
-                   {"surface_error_vertex_max", checks.vertex_error_max},
-                   {"surface_error_vertex_mean", checks.vertex_error_mean},
-                   {"surface_error_face_max", checks.face_error_max},
-                   {"surface_error_face_mean", checks.face_error_mean},
-                   {"self_intersecting_pairs", checks.self_intersecting_pairs},
-                   {"inverted_faces", checks.inverted_faces},
-                   {"inverted_area", checks.inverted_area}};
-    const ht::PolygonizeStats stats = total_polygonize(result);
-    j["bricks"] = {{"total", stats.bricks_total}, {"active", stats.bricks_active}};
-    j["sharp_features"] = {{"crease_edges_split", stats.crease_edges},
-                           {"corner_vertices", stats.corner_vertices},
-                           {"intersecting_pairs_after_sliding", stats.unfold.pairs_before},
-                           {"unfold_collapses", stats.unfold.collapses},
-                           {"intersecting_pairs_left", stats.crease_intersections}};
-    j["snap"] = {{"merged_vertices", stats.snap.merged_vertices},
-                 {"removed_triangles", stats.snap.removed_triangles},
-                 {"crease_points", stats.snap.crease_points},
-                 {"skipped_points", stats.snap.skipped_points}};
-    j["quality"] = {{"enabled", options.polygonize.quality.enabled}, {"collapses", stats.quality.collapses},
-                    {"flips", stats.quality.flips},         {"splits", stats.quality.splits},
-                    {"moved", stats.quality.moved},         {"reverted", stats.quality.reverted},
-                    {"skipped", stats.quality.skipped}};
-    j["seconds"] = {{"load", load_s},
-                    {"classify", stats.seconds_classify},
-                    {"sample", stats.seconds_sample},
-                    {"extract", stats.seconds_extract},
-                    {"merge", stats.seconds_merge},
-                    {"features", stats.seconds_features},
-                    {"unfold", stats.unfold.seconds},
-                    {"quality", stats.quality.seconds},
-                    {"mesh_total", mesh_s},
-                    {"checks", check_s},
-                    {"write", write_s}};
-    ht::cli::write_file_atomically(a.stats_json, j.dump(2) + "\n", "stats file");
-  }
+              a.out.c_str(), checks.triangles, checks.vertices, run.options.precision, run.mesh_seconds,
+              ht::root_strategy(run, tree.root()).c_str(), checks.watertight() ? "closed manifold" : "NOT watertight",
+              checks.genus);
+  if (!a.stats_json.empty())
+    ht::cli::write_file_atomically(a.stats_json, ht::mesh_stats_json(tree, run, a.scene, load_s, a.out, write_s),
+                                   "stats file");
   return 0;
 }
 

@@ -1,6 +1,7 @@
 #include "tools/render_cli.hpp"
 
 #include "meshers/mesh_plan.hpp"
+#include "meshers/mesh_run.hpp"
 #include "nodes/mesh_leaf.hpp"
 #include "runtime/scene.hpp"
 #include "runtime/tape.hpp"
@@ -33,7 +34,7 @@ int cmd_render(const RenderArgs& a) {
   if (ends_with(a.input, ".json")) {
     const Tree tree = load_scene(a.input);
     MeshOptions options;
-    options.precision = default_precision(tree, a.precision);
+    options.precision = ht::default_precision(tree, a.precision);
     MeshResult result;
     try {
       result = mesh_tree(tree, options);

@@ -6,7 +6,8 @@ set -euo pipefail
 here=$(cd "$(dirname "$0")/.." && pwd)
 
 packages=(cmake g++ make libtbb-dev libembree-dev libglm-dev libopenmesh-dev nlohmann-json3-dev
-          libcli11-dev libgtest-dev libgmock-dev libbenchmark-dev libhwy-dev libstb-dev libcgal-demo)
+          libcli11-dev libgtest-dev libgmock-dev libbenchmark-dev libhwy-dev libstb-dev libcgal-demo
+          pybind11-dev python3-dev python3-numpy python3-pytest)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -1,0 +1,208 @@
+#include "meshers/mesh_run.hpp"
+
+#include "meshers/surface_field.hpp"
+#include "runtime/tape.hpp"
+
+#include <glm/geometric.hpp>
+#include <nlohmann/json.hpp>
+
+#include <algorithm>
+#include <chrono>
+
+namespace ht {
+
+double default_precision(const Tree& tree, double requested) {
+  if (requested > 0) return requested;
+  if (tree.mesher_settings().precision > 0) return tree.mesher_settings().precision;
+  const Aabb solid = solid_bounds(tree.graph(), tree.root(), tree.threshold());
+  return solid.finite() ? std::max(glm::length(solid.size()) / 100.0, 1e-9) : 1.0;
+}
+
+namespace {
+
+MeshStrategy strategy_of(const std::string& name) {
+  return name == "global" ? MeshStrategy::Global : name == "local" ? MeshStrategy::Local : MeshStrategy::Auto;
+}
+
+std::string scene_strategy(const Tree& tree) {
+  const MesherHint s = tree.mesher_settings().strategy;
+  return s == MesherHint::Global ? "global" : s == MesherHint::Local ? "local" : "auto";
+}
+
+nlohmann::json node_json(const Graph& g, const NodeReport& e) {
+  nlohmann::json n = {{"node", g.label(e.node)},
+                      {"id", e.node},
+                      {"kind", std::string(kind_name(g.kind[e.node]))},
+                      {"strategy", to_string(e.strategy)},
+                      {"reason", to_string(e.reason)},
+                      {"triangles", e.triangles},
+                      {"seconds", e.seconds}};
+  if (e.rho >= 0) n["rho"] = e.rho;
+  if (!e.fallback_cause.empty()) n["fallback_cause"] = e.fallback_cause;
+  if (e.polygonized) {
+    n["bricks"] = {{"total", e.polygonize.bricks_total}, {"active", e.polygonize.bricks_active},
+                   {"points_evaluated", e.polygonize.points_evaluated}};
+    n["quality"] = {{"collapses", e.polygonize.quality.collapses}, {"flips", e.polygonize.quality.flips},
+                    {"moved", e.polygonize.quality.moved}, {"seconds", e.polygonize.quality.seconds}};
+  }
+  if (e.strategy == JobStrategy::TrimBlend || e.strategy == JobStrategy::TrimBoolean ||
+      e.strategy == JobStrategy::TrimCrop || e.strategy == JobStrategy::TrimLocalBlend)
+    n["local"] = {{"operand_triangles", e.local.operand_triangles},
+                  {"kept_triangles", e.local.kept_triangles},
+                  {"patch_triangles", e.local.patch_triangles},
+                  {"stitch_welded", e.local.stitch.welded},
+                  {"stitch_inserted", e.local.stitch.inserted},
+                  {"stitch_largest_gap", e.local.stitch.largest_gap},
+                  {"band_loops", e.local.bridge.loops},
+                  {"band_triangles", e.local.bridge.band_triangles},
+                  {"band_widest", e.local.bridge.widest},
+                  {"self_intersections", e.local.self_intersections}};
+  if (e.edges_split) n["edges_split"] = e.edges_split;
+  return n;
+}
+
+// The polygonizer's statistics summed over every job that ran it.
+PolygonizeStats total_polygonize(const MeshResult& r) {
+  PolygonizeStats s;
+  for (const NodeReport& e : r.nodes) {
+    if (!e.polygonized) continue;
+    const PolygonizeStats& p = e.polygonize;
+    s.bricks_total += p.bricks_total;
+    s.bricks_active += p.bricks_active;
+    s.points_evaluated += p.points_evaluated;
+    s.crease_edges += p.crease_edges;
+    s.corner_vertices += p.corner_vertices;
+    s.crease_intersections += p.crease_intersections;
+    s.unfold.pairs_before += p.unfold.pairs_before;
+    s.unfold.pairs_after += p.unfold.pairs_after;
+    s.unfold.collapses += p.unfold.collapses;
+    s.unfold.seconds += p.unfold.seconds;
+    s.snap.merged_vertices += p.snap.merged_vertices;
+    s.snap.removed_triangles += p.snap.removed_triangles;
+    s.snap.skipped_points += p.snap.skipped_points;
+    s.snap.crease_points += p.snap.crease_points;
+    s.seconds_classify += p.seconds_classify;
+    s.seconds_sample += p.seconds_sample;
+    s.seconds_extract += p.seconds_extract;
+    s.seconds_merge += p.seconds_merge;
+    s.seconds_features += p.seconds_features;
+    s.quality.collapses += p.quality.collapses;
+    s.quality.flips += p.quality.flips;
+    s.quality.splits += p.quality.splits;
+    s.quality.moved += p.quality.moved;
+    s.quality.reverted += p.quality.reverted;
+    s.quality.skipped |= p.quality.skipped;
+    s.quality.seconds += p.quality.seconds;
+  }
+  return s;
+}
+
+nlohmann::json checks_json(const MeshChecks& c) {
+  return {{"closed", c.closed()},
+          {"manifold", c.manifold()},
+          {"oriented", c.oriented()},
+          {"watertight", c.watertight()},
+          {"boundary_edges", c.boundary_edges},
+          {"nonmanifold_edges", c.nonmanifold_edges},
+          {"nonmanifold_vertices", c.nonmanifold_vertices},
+          {"misoriented_edges", c.misoriented_edges},
+          {"degenerate_triangles", c.degenerate_triangles},
+          {"components", c.components},
+          {"euler_characteristic", c.euler},
+          {"genus", c.genus},
+          {"area", c.area},
+          {"volume", c.volume},
+          {"min_angle_degrees", c.min_angle},
+          {"min_angle_p1_degrees", c.min_angle_p1},
+          {"min_angle_histogram_10deg", c.min_angle_histogram},
+          {"surface_error_vertex_max", c.vertex_error_max},
+          {"surface_error_vertex_mean", c.vertex_error_mean},
+          {"surface_error_face_max", c.face_error_max},
+          {"surface_error_face_mean", c.face_error_mean},
+          {"self_intersecting_pairs", c.self_intersecting_pairs},
+          {"inverted_faces", c.inverted_faces},
+          {"inverted_area", c.inverted_area}};
+}
+
+}  // namespace
+
+MeshRun run_mesh(const Tree& tree, const MeshRunOptions& o) {
+  using clock = std::chrono::steady_clock;
+  MeshRun run;
+  MeshOptions& options = run.options;
+  options.precision = default_precision(tree, o.precision);
+  options.polygonize.memory_budget = static_cast<std::size_t>(o.memory_gib * double(1u << 30));
+  options.polygonize.sharp_features = o.sharp_features;
+  options.polygonize.quality.enabled = o.quality;
+  options.blend_overlap = tree.mesher_settings().blend_overlap;
+  options.progress = o.progress;
+  options.cancel = o.cancel;
+  run.strategy = o.strategy.empty() ? scene_strategy(tree) : o.strategy;
+  options.strategy = strategy_of(run.strategy);
+  const auto t1 = clock::now();
+  run.result = mesh_tree(tree, options);
+  run.mesh_seconds = std::chrono::duration<double>(clock::now() - t1).count();
+  const auto t2 = clock::now();
+  const TriangleMesh& mesh = *run.result.mesh;
+  run.checks = check_mesh(mesh);
+  if (!mesh.triangles.empty()) {
+    // On tapes specialized to bricks of eight cells, as the polygonizer's: a big tree's root tape
+    // would pay for every primitive at each of the vertices and face centres.
+    SurfaceField field(run.result.tree->graph_ptr(), run.result.tree->root(), tree.threshold(),
+                       mesh.positions.front(), 8.0 * options.precision);
+    measure_surface_error(mesh, field, run.checks);
+  }
+  run.check_seconds = std::chrono::duration<double>(clock::now() - t2).count();
+  return run;
+}
+
+std::string root_strategy(const MeshRun& run, NodeId root) {
+  for (const NodeReport& e : run.result.nodes)
+    if (e.node == root) return std::string(to_string(e.strategy)) + " (" + to_string(e.reason) + ")";
+  return "?";
+}
+
+std::string mesh_stats_json(const Tree& tree, const MeshRun& run, const std::string& scene, double load_seconds,
+                            const std::string& output, double write_seconds) {
+  const MeshChecks& c = run.checks;
+  nlohmann::json j;
+  j["scene"] = scene;
+  if (!output.empty()) j["output"] = output;
+  j["precision"] = run.options.precision;
+  j["strategy"] = run.strategy;
+  nlohmann::json nodes = nlohmann::json::array();
+  for (const NodeReport& e : run.result.nodes) nodes.push_back(node_json(tree.graph(), e));
+  j["nodes"] = nodes;
+  j["triangles"] = c.triangles;
+  j["vertices"] = c.vertices;
+  j["checks"] = checks_json(c);
+  const PolygonizeStats stats = total_polygonize(run.result);
+  j["bricks"] = {{"total", stats.bricks_total}, {"active", stats.bricks_active}};
+  j["sharp_features"] = {{"crease_edges_split", stats.crease_edges},
+                         {"corner_vertices", stats.corner_vertices},
+                         {"intersecting_pairs_after_sliding", stats.unfold.pairs_before},
+                         {"unfold_collapses", stats.unfold.collapses},
+                         {"intersecting_pairs_left", stats.crease_intersections}};
+  j["snap"] = {{"merged_vertices", stats.snap.merged_vertices},
+               {"removed_triangles", stats.snap.removed_triangles},
+               {"crease_points", stats.snap.crease_points},
+               {"skipped_points", stats.snap.skipped_points}};
+  j["quality"] = {{"enabled", run.options.polygonize.quality.enabled}, {"collapses", stats.quality.collapses},
+                  {"flips", stats.quality.flips},         {"splits", stats.quality.splits},
+                  {"moved", stats.quality.moved},         {"reverted", stats.quality.reverted},
+                  {"skipped", stats.quality.skipped}};
+  j["seconds"] = {{"load", load_seconds},
+                  {"classify", stats.seconds_classify},
+                  {"sample", stats.seconds_sample},
+                  {"extract", stats.seconds_extract},
+                  {"merge", stats.seconds_merge},
+                  {"features", stats.seconds_features},
+                  {"unfold", stats.unfold.seconds},
+                  {"quality", stats.quality.seconds},
+                  {"mesh_total", run.mesh_seconds},
+                  {"checks", run.check_seconds}};
+  if (!output.empty()) j["seconds"]["write"] = write_seconds;
+  return j.dump(2) + "\n";
+}
+
+}  // namespace ht
