@@ -22,7 +22,7 @@
 // once per scene, untimed, so that OpenVDB's triangle count is within a few percent of
 // HybridTree's global one.
 //
-// Measured per benchmark: wall time (manual time, one run), peak memory of the same run in a
+// Measured per benchmark: wall time (manual time, the best of three runs), peak memory of the same run in a
 // fresh process (bench/peak_memory.hpp), and, once per scene and side, the mesh checks
 // (self-intersecting triangle pairs, smallest angle and its first percentile) and the surface
 // accuracy against the exact inputs: vertices farther than the balls' reach (Booleans: their
@@ -338,21 +338,29 @@ std::string peak_arg(int scene, int side, int threads, double voxel) {
   return buf;
 }
 
-/// One timed run of a side (the mesh thrown away), with its peak memory from a child process
-/// outside quick mode.
-Timing timed_run(int scene, int side, int threads) {
+/// Runs a side once on `threads` threads (the mesh thrown away).
+void run_side(int scene, int side, int threads, double voxel) {
   const PeerScene& s = peer_scenes()[std::size_t(scene)];
-  const double voxel = side == kVdb ? side_result(scene, kVdb).voxel : 0;
   tbb::task_arena arena(threads);
-  Timing t;
-  const auto start = std::chrono::steady_clock::now();
   arena.execute([&] {
     if (side == kVdb)
       benchmark::DoNotOptimize(run_openvdb(s, voxel, input()).triangles.size());
     else
       benchmark::DoNotOptimize(run_hybridtree(s, strategy_of(side), precision(), input()).mesh.triangles.size());
   });
-  t.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+/// The best of three timed runs of a side (one in quick mode), with its peak memory from a child
+/// process outside quick mode.
+Timing timed_run(int scene, int side, int threads) {
+  const double voxel = side == kVdb ? side_result(scene, kVdb).voxel : 0;
+  Timing t;
+  t.seconds = 1e300;
+  for (int run = 0; run < (bench::quick_mode ? 1 : 3); ++run) {
+    const auto start = std::chrono::steady_clock::now();
+    run_side(scene, side, threads, voxel);
+    t.seconds = std::min(t.seconds, std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count());
+  }
   if (!bench::quick_mode) t.peak_bytes = bench::peak_bytes_in_child("vdb_peer", peak_arg(scene, side, threads, voxel)).value_or(-1);
   return timings()[{scene, side, threads}] = t;
 }
@@ -372,17 +380,8 @@ const bool registered = bench::register_peak_task("vdb_peer", [](const std::stri
       scene >= int(peer_scenes().size()) || side < kAuto || side > kVdb || threads < 1)
     throw std::invalid_argument("bad argument " + arg);
   bench::quick_mode = quick != 0;
-  const Input& in = input();
-  return std::function<void()>([scene, side, threads, voxel, &in] {
-    const PeerScene& s = peer_scenes()[std::size_t(scene)];
-    tbb::task_arena arena(threads);
-    arena.execute([&] {
-      if (side == kVdb)
-        benchmark::DoNotOptimize(run_openvdb(s, voxel, in).triangles.size());
-      else
-        benchmark::DoNotOptimize(run_hybridtree(s, strategy_of(side), precision(), in).mesh.triangles.size());
-    });
-  });
+  input();  // read before the measure
+  return std::function<void()>([scene, side, threads, voxel] { run_side(scene, side, threads, voxel); });
 });
 
 // --- Report ----------------------------------------------------------------------------------
@@ -454,25 +453,33 @@ void add_ratio_line(const char* scene, int side, int threads, const SideResult& 
   summary.lines.emplace_back(buf);
 }
 
-// Args: scene (0 csg, 1 blend), threads.
-void BM_PeerOpenVDB(benchmark::State& state) {
-  const int scene = int(state.range(0)), threads = int(state.range(1));
+/// A benchmark's common part: the side's measures, one timed run in the loop, the counters and
+/// the summary's line; nullptr (the benchmark skipped) when a side failed to mesh.
+const SideResult* run_benchmark(benchmark::State& state, int scene, int side, int threads, Timing& t) {
   const SideResult* r = nullptr;
   try {
-    r = &side_result(scene, kVdb);
+    r = &side_result(scene, side);
+    side_result(scene, kVdb);
   } catch (const std::exception& e) {
     state.SkipWithError(e.what());
-    return;
+    return nullptr;
   }
-  Timing t;
   for (auto _ : state) {
-    t = timed_run(scene, kVdb, threads);
+    t = timed_run(scene, side, threads);
     state.SetIterationTime(t.seconds);
   }
-  state.SetLabel(std::string(peer_scenes()[std::size_t(scene)].name) + ", " + r->how);
+  const char* name = peer_scenes()[std::size_t(scene)].name;
+  state.SetLabel(std::string(name) + ", " + r->how);
   set_counters(state, *r, t);
-  state.counters["voxel"] = r->voxel;
-  add_line(peer_scenes()[std::size_t(scene)].name, kVdb, threads, *r, t);
+  add_line(name, side, threads, *r, t);
+  return r;
+}
+
+// Args: scene (0 csg, 1 blend), threads.
+void BM_PeerOpenVDB(benchmark::State& state) {
+  Timing t;
+  if (const SideResult* r = run_benchmark(state, int(state.range(0)), kVdb, int(state.range(1)), t))
+    state.counters["voxel"] = r->voxel;
 }
 BENCHMARK(BM_PeerOpenVDB)
     ->ArgsProduct({{0, 1}, {1, 2}})
@@ -484,23 +491,11 @@ BENCHMARK(BM_PeerOpenVDB)
 // Args: scene, strategy (0 auto, 1 global), threads.
 void BM_PeerHybridTree(benchmark::State& state) {
   const int scene = int(state.range(0)), side = int(state.range(1)), threads = int(state.range(2));
-  const SideResult *r = nullptr, *vdb = nullptr;
-  try {
-    r = &side_result(scene, side);
-    vdb = &side_result(scene, kVdb);
-  } catch (const std::exception& e) {
-    state.SkipWithError(e.what());
-    return;
-  }
   Timing t;
-  for (auto _ : state) {
-    t = timed_run(scene, side, threads);
-    state.SetIterationTime(t.seconds);
-  }
+  const SideResult* r = run_benchmark(state, scene, side, threads, t);
+  if (r == nullptr) return;
+  const SideResult* vdb = &side_result(scene, kVdb);
   const Timing& tv = timing(scene, kVdb, threads);
-  const char* name = peer_scenes()[std::size_t(scene)].name;
-  state.SetLabel(std::string(name) + ", " + r->how);
-  set_counters(state, *r, t);
   state.counters["h"] = precision();
   state.counters["x_tris"] = ratio(double(r->quality.triangles), double(vdb->quality.triangles));
   state.counters["x_time"] = ratio(t.seconds, tv.seconds);
@@ -508,8 +503,7 @@ void BM_PeerHybridTree(benchmark::State& state) {
   state.counters["x_angle_p1"] = ratio(r->quality.checks.min_angle_p1, vdb->quality.checks.min_angle_p1);
   state.counters["x_bunny_max"] = ratio(r->quality.bunny.max, vdb->quality.bunny.max);
   state.counters["x_bunny_mean"] = ratio(r->quality.bunny.mean, vdb->quality.bunny.mean);
-  add_line(name, side, threads, *r, t);
-  add_ratio_line(name, side, threads, *r, t, *vdb, tv);
+  add_ratio_line(peer_scenes()[std::size_t(scene)].name, side, threads, *r, t, *vdb, tv);
 }
 BENCHMARK(BM_PeerHybridTree)
     ->ArgsProduct({{0, 1}, {0, 1}, {1, 2}})
