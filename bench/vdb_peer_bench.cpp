@@ -6,10 +6,10 @@
 // The scenes (balls are point primitives, F = 1, their surface the sphere of radius r0 about the
 // centre; OpenVDB gets that exact sphere):
 //   csg    bunny00 united with a ball at its tail, minus a ball at its flank (min/max Booleans)
-//   blend  bunny00 (R = 0.05) blended with a ball above its back. OpenVDB has no blend: its
-//          analogue is the union followed by a morphological closing (dilate, then erode, by
-//          the bunny's radius of influence) of the level set masked to the ball's reach
-//          (LevelSetFilter::offset with an alpha mask). A blend of positive fields only adds
+//   blend  bunny00 (R = 0.05) blended with a ball at its ear (examples/bunny_ear.json). OpenVDB
+//          has no blend: its analogue is the union followed by a morphological closing (dilate,
+//          then erode, by the bunny's radius of influence) of the level set masked to the ball's
+//          reach (LevelSetFilter::offset with an alpha mask). A blend of positive fields only adds
 //          material, in the concave junction; a closing only adds material, in concave places,
 //          and leaves convex parts (the ball away from the bunny) as they were. Curvature or
 //          Gaussian flow would also shrink the ball and the bunny's convex parts.
@@ -22,8 +22,8 @@
 // once per scene, untimed, so that OpenVDB's triangle count is within a few percent of
 // HybridTree's global one.
 //
-// Measured per benchmark: wall time (manual time, the best of three runs), peak memory of the same run in a
-// fresh process (bench/peak_memory.hpp), and, once per scene and side, the mesh checks
+// Measured per benchmark: wall time (manual time, the best of three runs), peak memory of the
+// same run in a fresh process (bench/peak_memory.hpp), and, once per scene and side, the mesh checks
 // (self-intersecting triangle pairs, smallest angle and its first percentile) and the surface
 // accuracy against the exact inputs: vertices farther than the balls' reach (Booleans: their
 // surface; blend: their radius of influence) plus a margin of 3 h measured to bunny00's exact
@@ -33,7 +33,7 @@
 // at the end.
 //
 // Quick mode (bench/main.cpp) runs both scenes coarser (h = 0.04, two tries at the voxel size)
-// and skips the peak-memory children (reported as -1): about 12 s of the harness's minute.
+// and skips the peak-memory children (reported as -1): about 10 s of the harness's minute.
 #include "bench/bench_util.hpp"
 #include "bench/peak_memory.hpp"
 #include "meshers/mesh_checks.hpp"
@@ -87,6 +87,7 @@ struct PeerScene {
 };
 
 const std::vector<PeerScene>& peer_scenes() {
+  // csg: balls of radius about 0.12 and 0.15 (R = r0 / 0.4542 at T = 0.5, F = 1).
   static const std::vector<PeerScene> scenes = {
       {"csg", false, 0.05, {{{0.50, -0.22, 0.06}, 0.12 / 0.4542, false}, {{0.10, -0.17, 0.44}, 0.15 / 0.4542, true}}},
       {"blend", true, 0.05, {{{-0.005, 0.5, -0.12}, 0.12, false}}},
@@ -201,8 +202,8 @@ TriangleMesh run_openvdb(const PeerScene& s, double voxel, const Input& in) {
     // The closing, masked to the ball's reach: alpha 1 deeper than a quarter of R inside the
     // reach, easing to 0 at its boundary (the mask is the reach sphere's signed distance). Only
     // a box about the reach is filtered (every offset step re-tracks the whole narrow band it is
-    // given: on the whole bunny it took 30 times longer), then united back: the closing only
-    // adds material, and the caps the clipping makes lie inside the solid, past the mask.
+    // given), then united back: the closing only adds material, and the caps the clipping makes
+    // lie inside the solid, past the mask.
     const float ramp = float(0.25 * ball.R);
     FloatGrid::Ptr reach = openvdb::tools::createLevelSetSphere<FloatGrid>(float(ball.R), c, v, ramp / v + 1.0f);
     const double pad = ball.R + s.bunny_R + 4 * voxel;
