@@ -1,7 +1,8 @@
 // The peer comparison of issue 12: the same Boolean and blend-like operations on bunny00, done by
-// HybridTree (the default strategy, auto, and global polygonization) and by OpenVDB's level sets
-// (mesh to level set, CSG, level set to mesh), in one run, at 1 and 2 threads. Built only where
-// OpenVDB was found (cmake/Dependencies.cmake; Debian's libopenvdb-dev).
+// HybridTree (the default strategy, auto; global polygonization, with and without its crease
+// step) and by OpenVDB's level sets (mesh to level set, CSG, level set to mesh), in one run, at 1
+// and 2 threads. Built only where OpenVDB was found (cmake/Dependencies.cmake; Debian's
+// libopenvdb-dev).
 //
 // The scenes (balls are point primitives, F = 1, their surface the sphere of radius r0 about the
 // centre; OpenVDB gets that exact sphere):
@@ -33,7 +34,8 @@
 // at the end.
 //
 // Quick mode (bench/main.cpp) runs both scenes coarser (h = 0.04, two tries at the voxel size)
-// and skips the peak-memory children (reported as -1): about 10 s of the harness's minute.
+// and skips the peak-memory children (reported as -1): 16 s of the harness's minute with the
+// machine's two cores loaded seven deep, less when it is quiet.
 #include "bench/bench_util.hpp"
 #include "bench/peak_memory.hpp"
 #include "meshers/mesh_checks.hpp"
@@ -97,8 +99,13 @@ const std::vector<PeerScene>& peer_scenes() {
 
 double precision() { return bench::quick_mode ? 0.04 : 0.01; }
 
-enum Side : int { kAuto = 0, kGlobal = 1, kVdb = 2 };
-const char* side_name(int side) { return side == kAuto ? "HybridTree auto" : side == kGlobal ? "HybridTree global" : "OpenVDB"; }
+/// The sides: HybridTree's default strategy, global polygonization, global without the crease
+/// step (PolygonizeOptions::sharp_features off), and OpenVDB.
+enum Side : int { kAuto = 0, kGlobal = 1, kGlobalSmooth = 2, kVdb = 3 };
+const char* side_name(int side) {
+  constexpr const char* names[] = {"HybridTree auto", "HybridTree global", "global, no creases", "OpenVDB"};
+  return names[side];
+}
 
 struct Input {
   std::vector<glm::dvec3> positions;
@@ -129,7 +136,7 @@ struct Meshed {
   std::string how;  ///< the root job's strategy and reason
 };
 
-Meshed run_hybridtree(const PeerScene& s, MeshStrategy strategy, double h, const Input& in) {
+Meshed run_hybridtree(const PeerScene& s, int side, double h, const Input& in) {
   auto leaf = MeshLeaf::from_triangles(in.positions, in.triangles, "bunny00.off");
   Builder b(kThreshold);
   NodeId root = b.mesh(leaf, {s.bunny_R});
@@ -140,7 +147,8 @@ Meshed run_hybridtree(const PeerScene& s, MeshStrategy strategy, double h, const
   const Tree tree = b.build(root);
   MeshOptions o;
   o.precision = h;
-  o.strategy = strategy;
+  o.strategy = side == kAuto ? MeshStrategy::Auto : MeshStrategy::Global;
+  o.polygonize.sharp_features = side != kGlobalSmooth;
   MeshResult r = mesh_tree(tree, o);
   Meshed out{*r.mesh, {}};
   for (const NodeReport& n : r.nodes)
@@ -297,7 +305,6 @@ std::map<std::tuple<int, int, int>, Timing>& timings() {
   return r;
 }
 
-MeshStrategy strategy_of(int side) { return side == kAuto ? MeshStrategy::Auto : MeshStrategy::Global; }
 
 /// The voxel size at which OpenVDB's triangle count is closest to `target`: triangles scale as
 /// 1 / voxel^2, so each try corrects the last by the square root of the counts' ratio.
@@ -326,7 +333,7 @@ const SideResult& side_result(int scene, int side) {
     r.quality = measure(s, run_openvdb(s, r.voxel, input()), margin);
     r.how = "voxel " + std::to_string(r.voxel);
   } else {
-    Meshed m = run_hybridtree(s, strategy_of(side), precision(), input());
+    Meshed m = run_hybridtree(s, side, precision(), input());
     r.quality = measure(s, m.mesh, margin);
     r.how = m.how;
   }
@@ -347,7 +354,7 @@ void run_side(int scene, int side, int threads, double voxel) {
     if (side == kVdb)
       benchmark::DoNotOptimize(run_openvdb(s, voxel, input()).triangles.size());
     else
-      benchmark::DoNotOptimize(run_hybridtree(s, strategy_of(side), precision(), input()).mesh.triangles.size());
+      benchmark::DoNotOptimize(run_hybridtree(s, side, precision(), input()).mesh.triangles.size());
   });
 }
 
@@ -444,7 +451,7 @@ void add_ratio_line(const char* scene, int side, int threads, const SideResult& 
   const Quality &p = a.quality, &q = b.quality;
   char buf[512];
   std::snprintf(buf, sizeof buf, "%-6s %-17s %3d %8.2f %8.2f %8.2f %7s %7.2f %7.2f %10.2f %10.2f %7s %10.2f %10.2f\n", scene,
-                (std::string("x ") + (side == kAuto ? "auto" : "global")).c_str(), threads,
+                (std::string("x ") + (side == kAuto ? "auto" : side == kGlobal ? "global" : "no creases")).c_str(), threads,
                 ratio(double(p.triangles), double(q.triangles)), ratio(ta.seconds, tb.seconds),
                 ratio(ta.peak_bytes, tb.peak_bytes),
                 (std::to_string(p.checks.self_intersecting_pairs) + "/" + std::to_string(q.checks.self_intersecting_pairs)).c_str(),
@@ -489,7 +496,7 @@ BENCHMARK(BM_PeerOpenVDB)
     ->Iterations(1)
     ->Unit(benchmark::kMillisecond);
 
-// Args: scene, strategy (0 auto, 1 global), threads.
+// Args: scene, side (0 auto, 1 global, 2 global without the crease step), threads.
 void BM_PeerHybridTree(benchmark::State& state) {
   const int scene = int(state.range(0)), side = int(state.range(1)), threads = int(state.range(2));
   Timing t;
@@ -507,8 +514,8 @@ void BM_PeerHybridTree(benchmark::State& state) {
   add_ratio_line(peer_scenes()[std::size_t(scene)].name, side, threads, *r, t, *vdb, tv);
 }
 BENCHMARK(BM_PeerHybridTree)
-    ->ArgsProduct({{0, 1}, {0, 1}, {1, 2}})
-    ->ArgNames({"scene", "global", "threads"})
+    ->ArgsProduct({{0, 1}, {kAuto, kGlobal, kGlobalSmooth}, {1, 2}})
+    ->ArgNames({"scene", "side", "threads"})
     ->UseManualTime()
     ->Iterations(1)
     ->Unit(benchmark::kMillisecond);
