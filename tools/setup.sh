@@ -5,9 +5,12 @@
 set -euo pipefail
 here=$(cd "$(dirname "$0")/.." && pwd)
 
+# libopenvdb-dev (10.0.1; it pulls in libopenvdb10.0, libblosc-dev, libimath-dev, liblog4cplus) is
+# for the OpenVDB peer benchmark only (bench/vdb_peer_bench.cpp); its headers also include Boost's,
+# which libcgal-demo already brings through libcgal-dev.
 packages=(cmake g++ make libtbb-dev libembree-dev libglm-dev libopenmesh-dev nlohmann-json3-dev
           libcli11-dev libgtest-dev libgmock-dev libbenchmark-dev libhwy-dev libstb-dev libcgal-demo
-          pybind11-dev python3-dev python3-numpy python3-pytest)
+          pybind11-dev python3-dev python3-numpy python3-pytest libopenvdb-dev)
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")
