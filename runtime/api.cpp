@@ -13,6 +13,7 @@
 #include "runtime/memory_budget.hpp"
 #include "runtime/optimize.hpp"
 #include "runtime/scene.hpp"
+#include "runtime/scene_write.hpp"
 #include "runtime/tape.hpp"
 #include "runtime/tape_eval.hpp"
 #include "runtime/tree_eval.hpp"
@@ -135,6 +136,16 @@ Tree Tree::from_json(const std::string& text, const std::string& base_dir, const
     const auto t0 = clock::now();
     ht::Tree loaded = ht::optimize(ht::load_scene_text(text, base_dir, source));
     return Tree(std::make_shared<const Impl>(std::move(loaded), source, seconds_since(t0)));
+  });
+}
+
+std::string Tree::to_json(const std::string& scene_dir) const {
+  return guarded(impl_->source, [&] {
+    try {
+      return ht::write_scene_text(impl_->loaded, scene_dir);
+    } catch (const ht::SceneWriteError& e) {
+      throw InputError(impl_->source + ": " + e.what(), impl_->source, {});
+    }
   });
 }
 

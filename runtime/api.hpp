@@ -184,6 +184,11 @@ class HYBRIDTREE_API Tree {
   static Tree from_json(const std::string& text, const std::string& base_dir = ".",
                         const std::string& source = "<text>");
 
+  /// The tree as scene format v1 JSON (what Tree::from_json reads back into the same field):
+  /// mesh files named relative to `scene_dir` where they can be. Throws InputError for a mesh
+  /// that came from no file.
+  std::string to_json(const std::string& scene_dir = ".") const;
+
   /// The threshold T: the surface is {field = T}, the solid {field >= T}.
   double threshold() const;
   /// The box outside which the field is 0 ({lo x, lo y, lo z, hi x, hi y, hi z}); infinite
@@ -236,6 +241,11 @@ struct Falloff {
   double strength = 1.0;
 };
 enum class Axis : int { X = 0, Y = 1, Z = 2 };
+/// How a Boolean combines its operands (SCENE_FORMAT.md): `Auto` picks R-functions under a
+/// blend and min/max elsewhere.
+enum class BooleanMode : int { Auto = 0, MinMax = 1, RFunction = 2 };
+/// How a node asks to be meshed (the scene format's `mesher` on operators and warps).
+enum class MesherHint : int { Auto = 0, Global = 1, Local = 2 };
 
 /// Every call checks its arguments and throws InputError whose path() is the key at fault
 /// ("radius", "children[1]") and whose message is "key: rule". Children must be nodes this
@@ -262,11 +272,11 @@ class HYBRIDTREE_API Builder {
   Node mesh(const std::string& file, Falloff f, bool repair = false, bool winding = false);
 
   Node blend(std::span<const Node> children);
-  Node unite(std::span<const Node> children);
-  Node intersect(std::span<const Node> children);
+  Node unite(std::span<const Node> children, BooleanMode mode = BooleanMode::Auto);
+  Node intersect(std::span<const Node> children, BooleanMode mode = BooleanMode::Auto);
   /// children[0] minus each of the others.
-  Node subtract(std::span<const Node> children);
-  Node local_blend(Node a, Node b, Node region);
+  Node subtract(std::span<const Node> children, BooleanMode mode = BooleanMode::Auto);
+  Node local_blend(Node a, Node b, Node region, BooleanMode mode = BooleanMode::Auto);
   Node crop(Node child, Vec3 min, Vec3 max);
 
   /// The forward affine map, row-major 4 x 4 (last row 0 0 0 1, linear part invertible).
@@ -274,6 +284,15 @@ class HYBRIDTREE_API Builder {
   Node twist(Node child, Axis axis, Vec3 center, double rate);
   Node taper(Node child, Axis axis, Vec3 center, double h0, double h1, double s0, double s1);
   Node bend(Node child, Axis axis, Vec3 center, double h0, double h1, double rate);
+  /// Free-form deformation: lattice [min, max] with dims intervals an axis and
+  /// (l+1)(m+1)(n+1) control points as an (n, 3) array, x fastest. Its field is the
+  /// pseudo-distance of its child's deformed mesh (made when the tree is meshed), with f.
+  Node ffd(Node child, Vec3 min, Vec3 max, std::array<int, 3> dims, std::span<const double> points, Falloff f);
+
+  /// Names a node (messages and statistics name it; the optimizer never splices it away).
+  void set_name(Node node, const std::string& name);
+  /// How an operator or warp asks to be meshed.
+  void set_mesher(Node node, MesherHint hint);
 
   /// The tree rooted at `root`; the builder stays usable.
   Tree build(Node root);

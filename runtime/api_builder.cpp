@@ -22,6 +22,19 @@ namespace {
 glm::dvec3 v(const Vec3& a) { return {a[0], a[1], a[2]}; }
 ht::Falloff fall(const Falloff& f) { return {f.radius, f.strength}; }
 ht::Axis ax(Axis a) { return static_cast<ht::Axis>(static_cast<int>(a)); }
+ht::BooleanMode mode_of(BooleanMode m) {
+  return m == BooleanMode::MinMax ? ht::BooleanMode::MinMax
+         : m == BooleanMode::RFunction ? ht::BooleanMode::RFunction
+                                       : ht::BooleanMode::Auto;
+}
+std::vector<glm::dvec3> xyz(std::span<const double> points) {
+  if (points.size() % 3 != 0)
+    throw InputError("points: expected an (n, 3) array, got " + std::to_string(points.size()) + " numbers", {},
+                     "points");
+  std::vector<glm::dvec3> p(points.size() / 3);
+  for (std::size_t i = 0; i < p.size(); ++i) p[i] = {points[3 * i], points[3 * i + 1], points[3 * i + 2]};
+  return p;
+}
 
 // Builder calls are argument checks and arena appends: their errors are InputErrors.
 template <class F>
@@ -52,11 +65,7 @@ Node Builder::triangle(Vec3 a, Vec3 b, Vec3 c, Falloff f) {
   return call([&] { return impl_->b.triangle(v(a), v(b), v(c), fall(f)); });
 }
 Node Builder::curve(std::span<const double> points, Falloff f) {
-  if (points.size() % 3 != 0)
-    throw InputError("points: expected an (n, 3) array, got " + std::to_string(points.size()) + " numbers", {},
-                     "points");
-  std::vector<glm::dvec3> p(points.size() / 3);
-  for (std::size_t i = 0; i < p.size(); ++i) p[i] = {points[3 * i], points[3 * i + 1], points[3 * i + 2]};
+  const std::vector<glm::dvec3> p = xyz(points);
   return call([&] { return impl_->b.curve(p, fall(f)); });
 }
 Node Builder::box(Vec3 lo, Vec3 hi, Falloff f) {
@@ -77,17 +86,17 @@ Node Builder::mesh(const std::string& file, Falloff f, bool repair, bool winding
 Node Builder::blend(std::span<const Node> c) {
   return call([&] { return impl_->b.blend(c); });
 }
-Node Builder::unite(std::span<const Node> c) {
-  return call([&] { return impl_->b.unite(c); });
+Node Builder::unite(std::span<const Node> c, BooleanMode m) {
+  return call([&] { return impl_->b.unite(c, mode_of(m)); });
 }
-Node Builder::intersect(std::span<const Node> c) {
-  return call([&] { return impl_->b.intersect(c); });
+Node Builder::intersect(std::span<const Node> c, BooleanMode m) {
+  return call([&] { return impl_->b.intersect(c, mode_of(m)); });
 }
-Node Builder::subtract(std::span<const Node> c) {
-  return call([&] { return impl_->b.subtract(c); });
+Node Builder::subtract(std::span<const Node> c, BooleanMode m) {
+  return call([&] { return impl_->b.subtract(c, mode_of(m)); });
 }
-Node Builder::local_blend(Node a, Node b, Node region) {
-  return call([&] { return impl_->b.local_blend(a, b, region); });
+Node Builder::local_blend(Node a, Node b, Node region, BooleanMode m) {
+  return call([&] { return impl_->b.local_blend(a, b, region, mode_of(m)); });
 }
 Node Builder::crop(Node child, Vec3 lo, Vec3 hi) {
   return call([&] { return impl_->b.crop(child, v(lo), v(hi)); });
@@ -107,6 +116,29 @@ Node Builder::taper(Node child, Axis axis, Vec3 center, double h0, double h1, do
 }
 Node Builder::bend(Node child, Axis axis, Vec3 center, double h0, double h1, double rate) {
   return call([&] { return impl_->b.bend(child, ax(axis), v(center), h0, h1, rate); });
+}
+
+Node Builder::ffd(Node child, Vec3 lo, Vec3 hi, std::array<int, 3> dims, std::span<const double> points, Falloff f) {
+  const std::vector<glm::dvec3> p = xyz(points);
+  return call([&] { return impl_->b.ffd(child, v(lo), v(hi), {dims[0], dims[1], dims[2]}, p, fall(f)); });
+}
+
+void Builder::set_name(Node node, const std::string& name) {
+  call([&] {
+    if (node >= impl_->b.size()) throw ht::BuildError("node", "is not a node of this builder");
+    impl_->b.set_name(node, name);
+    return node;
+  });
+}
+
+void Builder::set_mesher(Node node, MesherHint hint) {
+  call([&] {
+    if (node >= impl_->b.size()) throw ht::BuildError("node", "is not a node of this builder");
+    impl_->b.set_mesher(node, hint == MesherHint::Global ? ht::MesherHint::Global
+                              : hint == MesherHint::Local ? ht::MesherHint::Local
+                                                          : ht::MesherHint::Auto);
+    return node;
+  });
 }
 
 Tree Builder::build(Node root) {

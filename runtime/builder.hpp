@@ -54,6 +54,8 @@ class Builder {
   Builder& operator=(const Builder&) = delete;
 
   double threshold() const { return threshold_; }
+  /// Nodes made so far (ids are 0 .. size() - 1).
+  std::size_t size() const { return writer_.size(); }
 
   // Skeletal primitives (SCENE_FORMAT.md, "Skeletal primitives").
   NodeId point(glm::dvec3 center, Falloff f);

@@ -153,6 +153,32 @@ def test_builder_checks_and_builds():
     assert np.array_equal(tree.field(p), text.field(p))
 
 
+def test_builder_modes_ffd_names_hints_and_json():
+    b = hybridtree.Builder(0.5)
+    a = b.point((0, 0, 0), radius=1.0)
+    c = b.point((0.6, 0, 0), radius=1.0)
+    u = b.unite([a, c], boolean="rfunction")
+    b.set_name(u, "pair")
+    b.set_mesher(u, "global")
+    with pytest.raises(ValueError):
+        b.unite([a, c], boolean="smooth")
+    with pytest.raises(ValueError):
+        b.set_mesher(u, "fast")
+    lattice = np.array([(x, y, z) for z in (-2, 2) for y in (-2, 2) for x in (-2, 2)], dtype=np.float64)
+    f = b.ffd(b.box((-0.5, -0.5, -0.5), (0.5, 0.5, 0.5), radius=0.3), (-2, -2, -2), (2, 2, 2), (1, 1, 1), lattice,
+              radius=0.1)
+    tree = b.build(b.blend([u, f]))
+    scene = json.loads(tree.to_json())
+    assert scene["root"]["children"][0]["name"] == "pair"
+    # Under a blend, auto means R-functions: the optimized tree may say either.
+    assert scene["root"]["children"][0].get("boolean", "auto") in ("auto", "rfunction")
+    assert scene["root"]["children"][0]["mesher"] == "global"
+    assert scene["root"]["children"][1]["type"] == "ffd"
+    back = hybridtree.loads(tree.to_json())
+    p = np.random.default_rng(4).uniform(-1.5, 1.5, (300, 3))
+    assert np.allclose(tree.field(p), back.field(p), atol=1e-6)
+
+
 def test_mesh_options_are_checked(garden):
     with pytest.raises(hybridtree.InputError, match="precision: must be >= 0"):
         garden.mesh(precision=-1.0)

@@ -19,6 +19,20 @@ Axis axis_arg(const std::string& a) {
   throw py::value_error("axis: expected \"x\", \"y\" or \"z\", not \"" + a + "\"");
 }
 
+BooleanMode mode_arg(const std::string& m) {
+  if (m == "auto") return BooleanMode::Auto;
+  if (m == "minmax") return BooleanMode::MinMax;
+  if (m == "rfunction") return BooleanMode::RFunction;
+  throw py::value_error("boolean: expected \"auto\", \"minmax\" or \"rfunction\", not \"" + m + "\"");
+}
+
+MesherHint hint_arg(const std::string& h) {
+  if (h == "auto") return MesherHint::Auto;
+  if (h == "global") return MesherHint::Global;
+  if (h == "local") return MesherHint::Local;
+  throw py::value_error("mesher: expected \"auto\", \"global\" or \"local\", not \"" + h + "\"");
+}
+
 }  // namespace
 
 void bind_builder(py::module_& m) {
@@ -51,10 +65,15 @@ void bind_builder(py::module_& m) {
              return b.mesh(file, {r, s}, repair, winding);
            }, py::arg("file"), py::kw_only(), R(), F(), py::arg("repair") = false, py::arg("winding") = false)
       .def("blend", [](Builder& b, const Nodes& c) { return b.blend(c); }, py::arg("children"))
-      .def("unite", [](Builder& b, const Nodes& c) { return b.unite(c); }, py::arg("children"))
-      .def("intersect", [](Builder& b, const Nodes& c) { return b.intersect(c); }, py::arg("children"))
-      .def("subtract", [](Builder& b, const Nodes& c) { return b.subtract(c); }, py::arg("children"))
-      .def("local_blend", &Builder::local_blend, py::arg("a"), py::arg("b"), py::arg("region"))
+      .def("unite", [](Builder& b, const Nodes& c, const std::string& mode) { return b.unite(c, mode_arg(mode)); },
+           py::arg("children"), py::kw_only(), py::arg("boolean") = "auto")
+      .def("intersect", [](Builder& b, const Nodes& c, const std::string& mode) { return b.intersect(c, mode_arg(mode)); },
+           py::arg("children"), py::kw_only(), py::arg("boolean") = "auto")
+      .def("subtract", [](Builder& b, const Nodes& c, const std::string& mode) { return b.subtract(c, mode_arg(mode)); },
+           py::arg("children"), py::kw_only(), py::arg("boolean") = "auto")
+      .def("local_blend", [](Builder& b, Node a, Node c, Node r, const std::string& mode) {
+             return b.local_blend(a, c, r, mode_arg(mode));
+           }, py::arg("a"), py::arg("b"), py::arg("region"), py::kw_only(), py::arg("boolean") = "auto")
       .def("crop", &Builder::crop, py::arg("child"), py::arg("min"), py::arg("max"))
       .def("affine", &Builder::affine, py::arg("child"), py::arg("forward"),
            "forward: the 16 numbers of the 4 x 4 map, row by row")
@@ -66,5 +85,14 @@ void bind_builder(py::module_& m) {
       .def("bend", [](Builder& b, Node c, const std::string& a, Vec3 o, double h0, double h1, double rate) {
              return b.bend(c, axis_arg(a), o, h0, h1, rate);
            }, py::arg("child"), py::arg("axis"), py::arg("center"), py::arg("h0"), py::arg("h1"), py::arg("rate"))
+      .def("ffd", [](Builder& b, Node c, Vec3 lo, Vec3 hi, std::array<int, 3> dims, const py::handle& points, double r,
+                     double s) {
+             const auto p = python::points_arg(points, "points");
+             return b.ffd(c, lo, hi, dims, p.xyz, {r, s});
+           }, py::arg("child"), py::arg("min"), py::arg("max"), py::arg("dims"), py::arg("points"), py::kw_only(), R(), F(),
+           "Free-form deformation: (l+1)(m+1)(n+1) control points, x fastest")
+      .def("set_name", &Builder::set_name, py::arg("node"), py::arg("name"))
+      .def("set_mesher", [](Builder& b, Node n, const std::string& h) { b.set_mesher(n, hint_arg(h)); }, py::arg("node"),
+           py::arg("hint"), "\"auto\", \"global\" or \"local\"")
       .def("build", &Builder::build, py::arg("root"), "The tree rooted at `root`");
 }

@@ -154,6 +154,8 @@ void write_arrays(const std::string& file, const py::handle& vertices, const py:
 void bind_tree(py::module_& m) {
   py::class_<Tree>(m, "Tree", "An immutable HybridTree: evaluate its field, mesh its surface. Thread-safe.")
       .def_property_readonly("threshold", &Tree::threshold, "T: the surface is {field = T}")
+      .def("to_json", &Tree::to_json, py::arg("scene_dir") = ".",
+           "The tree as scene format v1 JSON text (mesh files relative to scene_dir)")
       .def_property_readonly("bounds", &Tree::bounds, "(lo x, lo y, lo z, hi x, hi y, hi z): the field is 0 outside")
       .def("field", &field, py::arg("points"), py::kw_only(), py::arg("threads") = 0,
            "The field at an (N, 3) float64 or float32 array of points, as an (N,) float64 array")
