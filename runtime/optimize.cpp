@@ -10,10 +10,12 @@
 #include "runtime/optimize_regroup.hpp"
 #include "runtime/tape.hpp"
 
+#include <tbb/parallel_for.h>
 #include <tbb/parallel_invoke.h>
 
 #include <algorithm>
 #include <chrono>
+#include <memory>
 #include <vector>
 
 namespace ht {
@@ -28,9 +30,24 @@ BooleanMode resolved(BooleanMode mode, bool under_blend) {
   return use_rfunction(mode, under_blend) ? BooleanMode::RFunction : BooleanMode::MinMax;
 }
 
+// The contexts each node of `g` is reached in from root: bit 0 alone, bit 1 under a blend.
+std::vector<std::uint8_t> contexts(const Graph& g, NodeId root) {
+  std::vector<std::uint8_t> mask(g.size(), 0);
+  mask[root] = 1;
+  for (NodeId n = root + 1; n-- > 0;) {
+    if (!mask[n]) continue;
+    const bool blends = g.kind[n] == NodeKind::Blend || g.kind[n] == NodeKind::LocalBlend;
+    for (NodeId c : g.children_of(n)) mask[c] |= blends ? std::uint8_t(2) : mask[n];
+  }
+  return mask;
+}
+
 class Rewriter {
  public:
-  Rewriter(const Graph& g, const OptimizeOptions& o, OptimizeStats& s) : g_(g), o_(o), s_(s), w_(o.merge) {
+  // sizes: per node of g, the nodes of its subtree counted as a tree (saturating), which says
+  // which operands are worth a task of their own.
+  Rewriter(const Graph& g, const OptimizeOptions& o, OptimizeStats& s, const std::vector<std::uint32_t>& sizes)
+      : g_(g), o_(o), s_(s), sizes_(sizes), w_(o.merge) {
     for (auto& m : memo_) m.assign(g.size(), kNone);
   }
 
@@ -146,6 +163,7 @@ class Rewriter {
 
   NodeId blend(NodeId n) {
     const auto terms = operands(n, [&](NodeId c, std::size_t) { return g_.kind[c] == NodeKind::Blend; });
+    rewrite_in_parallel(terms, true);
     std::vector<NodeId> kids;
     for (NodeId c : terms) {
       if (o_.prune && g_.support(c, true).empty()) {  // 0 everywhere: a term that adds nothing
@@ -167,6 +185,7 @@ class Rewriter {
     const auto c = operands(n, [&](NodeId child, std::size_t i) {
       return g_.kind[child] == k && resolved(g_.boolean[child], ub) == mode && (!rf || i == 0);
     });
+    rewrite_in_parallel(c, ub);
     // max(x, 0) = x where x >= 0, which holds when any operand is non-negative.
     bool any_nonneg = false;
     for (NodeId child : c) any_nonneg = any_nonneg || g_.nonnegative[child];
@@ -199,6 +218,51 @@ class Rewriter {
       kids = {kids[0], u};
     }
     return w_.add(NodeKind::Difference, {}, kids, mode, g_.mesher[n], name(n));
+  }
+
+  // Independent subtrees as TBB tasks: operands big enough to pay for it are rewritten each by
+  // a Rewriter of its own into its own writer, then joined into this one in operand order, node
+  // by node in the order one walk would have written them; the merging writer makes what the
+  // tasks wrote twice (a subtree two operands share) one node again. The same graph results
+  // at any thread count.
+  void rewrite_in_parallel(std::span<const NodeId> operands, bool ub) {
+    std::vector<NodeId> big;
+    for (NodeId c : operands)
+      if (memo_[ub ? 1 : 0][c] == kNone && sizes_[c] >= kTaskNodes && std::find(big.begin(), big.end(), c) == big.end())
+        big.push_back(c);
+    if (!o_.parallel || big.size() < 2) return;
+    s_.tasks += big.size();
+    std::vector<OptimizeStats> stats(big.size());
+    std::vector<std::unique_ptr<Rewriter>> tasks(big.size());
+    std::vector<NodeId> roots(big.size());
+    tbb::parallel_for(std::size_t(0), big.size(), [&](std::size_t i) {
+      tasks[i] = std::make_unique<Rewriter>(g_, o_, stats[i], sizes_);
+      roots[i] = tasks[i]->rewrite(big[i], ub);
+    });
+    for (std::size_t i = 0; i < big.size(); ++i) {
+      memo_[ub ? 1 : 0][big[i]] = join(tasks[i]->writer().graph(), roots[i]);
+      add_counts(stats[i]);
+    }
+  }
+
+  // Copies what `root` reaches in `part` into this writer; returns root's id here.
+  NodeId join(const Graph& part, NodeId root) {
+    const std::vector<std::uint8_t> reached = contexts(part, root);
+    std::vector<NodeId> id(part.size(), kNone);
+    std::vector<NodeId> kids;
+    for (NodeId n = 0; n <= root; ++n) {
+      if (!reached[n]) continue;
+      kids.clear();
+      for (NodeId c : part.children_of(n)) kids.push_back(id[c]);
+      id[n] = w_.copy(part, n, kids);
+    }
+    return id[root];
+  }
+
+  void add_counts(const OptimizeStats& t) {
+    s_.flattened += t.flattened, s_.groups += t.groups, s_.warps_pushed += t.warps_pushed;
+    s_.affines_composed += t.affines_composed, s_.affines_folded += t.affines_folded;
+    s_.identities_removed += t.identities_removed, s_.pruned += t.pruned, s_.folded += t.folded, s_.tasks += t.tasks;
   }
 
   // Appends r to kids, or r's operands when r is a plain node of the same kind and mode.
@@ -250,43 +314,47 @@ class Rewriter {
     return out;
   }
 
+  static constexpr std::uint32_t kTaskNodes = 256;  // a subtree smaller than this is not worth a task
+
   const Graph& g_;
   const OptimizeOptions& o_;
   OptimizeStats& s_;
+  const std::vector<std::uint32_t>& sizes_;
   GraphWriter w_;
   std::vector<NodeId> memo_[2];
   std::vector<std::size_t> leaves_;
 };
 
-// The contexts each node of `g` is reached in from root: bit 0 alone, bit 1 under a blend.
-std::vector<std::uint8_t> contexts(const Graph& g, NodeId root) {
-  std::vector<std::uint8_t> mask(g.size(), 0);
-  mask[root] = 1;
-  for (NodeId n = root + 1; n-- > 0;) {
-    if (!mask[n]) continue;
-    const bool blends = g.kind[n] == NodeKind::Blend || g.kind[n] == NodeKind::LocalBlend;
-    for (NodeId c : g.children_of(n)) mask[c] |= blends ? std::uint8_t(2) : mask[n];
-  }
-  return mask;
-}
-
-// Keeps what root reaches, in id order, with each explicit Boolean mode written back as `auto`
-// where `auto` means the same in every context the node is reached in.
+// Keeps what root reaches, in post-order from the root (children in order, each node once), so
+// the ids depend on the tree alone, not on the order the rewriting wrote nodes in; each explicit
+// Boolean mode is written back as `auto` where `auto` means the same in every context the node
+// is reached in.
 std::pair<Graph, NodeId> compact(const Graph& g, NodeId root) {
   const std::vector<std::uint8_t> mask = contexts(g, root);
   GraphWriter out;
   std::vector<NodeId> id(g.size(), kNone);
-  for (NodeId n = 0; n <= root; ++n) {
-    if (!mask[n]) continue;
-    std::vector<NodeId> kids;
-    for (NodeId c : g.children_of(n)) kids.push_back(id[c]);
-    id[n] = out.copy(g, n, kids);
-    const BooleanMode m = g.boolean[n];
+  std::vector<std::pair<NodeId, std::size_t>> todo{{root, 0}};
+  std::vector<NodeId> kids;
+  while (!todo.empty()) {
+    auto& [n, next] = todo.back();
+    const auto c = g.children_of(n);
+    if (next < c.size()) {
+      const NodeId child = c[next++];
+      if (id[child] == kNone) todo.push_back({child, 0});
+      continue;
+    }
+    const NodeId node = n;
+    todo.pop_back();
+    if (id[node] != kNone) continue;  // reached twice before it was written
+    kids.clear();
+    for (NodeId child : g.children_of(node)) kids.push_back(id[child]);
+    id[node] = out.copy(g, node, kids);
+    const BooleanMode m = g.boolean[node];
     if (m == BooleanMode::Auto) continue;
     bool same = true;
     for (int ub = 0; ub < 2; ++ub)
-      if (mask[n] & (1 << ub)) same = same && use_rfunction(BooleanMode::Auto, ub == 1) == (m == BooleanMode::RFunction);
-    if (same) out.set_boolean(id[n], BooleanMode::Auto);
+      if (mask[node] & (1 << ub)) same = same && use_rfunction(BooleanMode::Auto, ub == 1) == (m == BooleanMode::RFunction);
+    if (same) out.set_boolean(id[node], BooleanMode::Auto);
   }
   return {out.take(), id[root]};
 }
@@ -311,7 +379,14 @@ Tree optimize(const Tree& tree, const OptimizeOptions& options, OptimizeStats* s
   OptimizeStats local;
   OptimizeStats& s = stats ? *stats : local;
   s = OptimizeStats{};
-  Rewriter rw(tree.graph(), options, s);
+  const Graph& g = tree.graph();
+  std::vector<std::uint32_t> sizes(g.size());
+  for (NodeId n = 0; n < g.size(); ++n) {
+    std::uint64_t count = 1;
+    for (NodeId c : g.children_of(n)) count += sizes[c];
+    sizes[n] = static_cast<std::uint32_t>(std::min<std::uint64_t>(count, 1u << 30));
+  }
+  Rewriter rw(g, options, s, sizes);
   const NodeId root = rw.rewrite(tree.root(), false);
   s.merged = rw.writer().merged();
   auto [graph, new_root] = compact(rw.writer().graph(), root);

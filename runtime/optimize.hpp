@@ -21,9 +21,11 @@
 // is resolved where the node was, and written back as `auto` only where it means the same in
 // every place the node ends up.
 //
-// Thread-safe: optimize() reads the tree and writes a new graph. The rewriting walk is one
-// linear pass on the calling thread; regrouping large operand sets splits them as TBB tasks, and
-// the before/after measurements run side by side. The result is the same at any thread count.
+// Thread-safe: optimize() reads the tree and writes a new graph. Operands of an n-ary node whose
+// subtrees are big (256 nodes or more) are rewritten as TBB tasks, each into a graph of its
+// own joined in operand order; regrouping large operand sets splits them as TBB tasks; the
+// before/after measurements run side by side. The result is the same at any thread count, and
+// the same graph as with `parallel` off.
 #pragma once
 
 #include "runtime/tree.hpp"
@@ -35,6 +37,7 @@ namespace ht {
 struct OptimizeOptions {
   bool flatten = true, regroup = true, warps = true, merge = true, prune = true, fold = true;
   int group_size = 4;  ///< operands (or groups) per group when regrouping, >= 2
+  bool parallel = true;  ///< big independent operands rewritten as TBB tasks (same result either way)
 };
 
 /// What a run did: sizes before and after, and what each rule did.
@@ -49,6 +52,7 @@ struct OptimizeStats {
   std::size_t merged = 0;      ///< nodes that turned out equal to one already written
   std::size_t pruned = 0;      ///< subtrees removed as 0 everywhere
   std::size_t folded = 0;      ///< one-operand operators replaced by their operand
+  std::size_t tasks = 0;       ///< subtrees rewritten as TBB tasks of their own
   double seconds = 0;
 };
 

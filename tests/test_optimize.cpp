@@ -17,6 +17,7 @@
 
 #include <glm/gtc/matrix_transform.hpp>
 #include <gtest/gtest.h>
+#include <tbb/task_arena.h>
 
 #include <cstdio>
 #include <filesystem>
@@ -258,4 +259,30 @@ TEST(Optimize, GroupsDoNotChangeTheMeshPlan) {
   const MeshChecks ca = check_mesh(*a.mesh), cc = check_mesh(*c.mesh);
   EXPECT_EQ(cc.genus, ca.genus);
   EXPECT_NEAR(cc.volume, ca.volume, 1e-3 * ca.volume);
+}
+
+TEST(Optimize, BigOperandsRewrittenAsTasksGiveTheSameGraphAtAnyThreadCount) {
+  Builder b(kT);
+  std::vector<NodeId> parts;
+  for (int i = 0; i < 3; ++i)
+    parts.push_back(b.affine(scenes::scatter(b, 300, 10 + std::uint64_t(i)), glm::translate(glm::dmat4(1.0), {30.0 * i, 0, 0})));
+  parts.push_back(parts[0]);  // shared: rewritten once or twice, one node either way
+  const Tree t = b.build(b.blend(parts));
+  auto same = [](const Graph& x, const Graph& y) {
+    return x.kind == y.kind && x.boolean == y.boolean && x.params == y.params && x.children == y.children &&
+           x.child_count == y.child_count;
+  };
+  OptimizeOptions serial;
+  serial.parallel = false;
+  const Tree one = optimize(t, serial);
+  for (int threads : {1, 2, 4}) {
+    tbb::task_arena arena(threads);
+    OptimizeStats s;
+    const Tree o = arena.execute([&] { return optimize(t, {}, &s); });
+    EXPECT_EQ(s.tasks, 3u);
+    EXPECT_TRUE(same(o.graph(), one.graph())) << threads << " threads";
+    EXPECT_EQ(o.root(), one.root());
+  }
+  test::Rng rng(86);
+  expect_same_field(t, one, solid_box(t), rng, 2000, "tasks");
 }

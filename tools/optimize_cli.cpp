@@ -28,9 +28,10 @@ std::string optimizer_report(const OptimizeStats& s) {
   }
   std::snprintf(buf, sizeof buf,
                 "               flattened %zu, groups %zu, warps pushed %zu, affines composed %zu, folded into "
-                "primitives %zu, identities removed %zu, merged %zu, pruned %zu, one-operand nodes folded %zu\n",
+                "primitives %zu, identities removed %zu, merged %zu, pruned %zu, one-operand nodes folded %zu, "
+                "subtrees as tasks %zu\n",
                 s.flattened, s.groups, s.warps_pushed, s.affines_composed, s.affines_folded, s.identities_removed,
-                s.merged, s.pruned, s.folded);
+                s.merged, s.pruned, s.folded, s.tasks);
   out += buf;
   return out;
 }
