@@ -48,9 +48,10 @@ void put_back(TriangleMesh& mesh, const Pieces& pieces, std::span<const Triangle
 bool to_openmesh(const TriangleMesh& mesh, std::span<const std::uint8_t> locked, std::span<const std::uint32_t> origin,
                  TriMesh& m, OpenMesh::VPropHandleT<bool>& locked_prop, OpenMesh::VPropHandleT<std::uint32_t>& origin_prop);
 
-/// A reworked OpenMesh region back in flat arrays: garbage-collects `m`, then writes its vertices
-/// and triangles in handle order and each vertex's `origin` property.
-void from_openmesh(TriMesh& m, OpenMesh::VPropHandleT<std::uint32_t> origin, TriangleMesh& out,
+/// A reworked OpenMesh region back in flat arrays: its vertices and triangles numbered as
+/// `m.garbage_collection()` would number them (without collecting: `m` is left as it is), and each
+/// vertex's `origin` property.
+void from_openmesh(const TriMesh& m, OpenMesh::VPropHandleT<std::uint32_t> origin, TriangleMesh& out,
                    std::vector<std::uint32_t>& origins);
 
 }  // namespace ht
