@@ -565,7 +565,7 @@ void improve_quality(TriangleMesh& mesh, std::span<const std::uint8_t> locked, s
       const std::vector<std::uint8_t> any(region.size(), 1), around = rings_around(mesh, region, any, kBandRings);
       for (std::size_t v = 0; v < region.size(); ++v) region[v] |= around[v];
       const std::vector<std::uint8_t> locked2 = moved(locked), crease2 = moved(crease);
-      improve_pieces(mesh, take_region(mesh, region), locked2, crease2, field, threshold, h, options, st, renumber);
+      improve_pieces(mesh, take_region(mesh, region, true), locked2, crease2, field, threshold, h, options, st, renumber);
       if (crease_after && !crease.empty()) *crease_after = moved(crease2);
     }
   }

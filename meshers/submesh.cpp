@@ -1,5 +1,7 @@
 #include "meshers/submesh.hpp"
 
+#include "meshers/union_find.hpp"
+
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -125,18 +127,34 @@ Pieces take_pieces(const TriangleMesh& mesh, std::vector<std::uint32_t> piece_of
   return out;
 }
 
-Pieces take_region(const TriangleMesh& mesh, std::span<const std::uint8_t> region) {
+Pieces take_region(const TriangleMesh& mesh, std::span<const std::uint8_t> region, bool apart) {
   std::vector<std::uint8_t> taken(mesh.triangles.size(), 0);
   for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
     const glm::uvec3 tri = mesh.triangles[t];
     taken[t] = region[tri[0]] || region[tri[1]] || region[tri[2]];
   }
   widen_past_pinches(mesh, taken);
-  std::vector<std::uint32_t> piece_of(mesh.triangles.size());
-  for (std::size_t t = 0; t < taken.size(); ++t) piece_of[t] = taken[t] ? 0u : ~0u;
-  Pieces out = take_pieces(mesh, std::move(piece_of), 1);
-  Submesh& sub = out.parts[0];
-  for (std::size_t v = 0; v < sub.rim.size(); ++v) sub.rim[v] |= !region[sub.origin[v]];
+  std::vector<std::uint32_t> piece_of(mesh.triangles.size(), ~0u);
+  std::size_t count = 1;
+  if (apart) {
+    // Pieces apart share no vertex, so each is free of pinches as the whole is.
+    UnionFind sets(mesh.positions.size());
+    for (std::size_t t = 0; t < taken.size(); ++t)
+      if (taken[t]) sets.unite(mesh.triangles[t][0], mesh.triangles[t][1]), sets.unite(mesh.triangles[t][0], mesh.triangles[t][2]);
+    std::vector<std::uint32_t> piece(mesh.positions.size(), ~0u);
+    count = 0;
+    for (std::size_t t = 0; t < taken.size(); ++t) {
+      if (!taken[t]) continue;
+      std::uint32_t& p = piece[sets.find(mesh.triangles[t][0])];
+      if (p == ~0u) p = std::uint32_t(count++);
+      piece_of[t] = p;
+    }
+  } else {
+    for (std::size_t t = 0; t < taken.size(); ++t) piece_of[t] = taken[t] ? 0u : ~0u;
+  }
+  Pieces out = take_pieces(mesh, std::move(piece_of), count);
+  for (Submesh& sub : out.parts)
+    for (std::size_t v = 0; v < sub.rim.size(); ++v) sub.rim[v] |= !region[sub.origin[v]];
   return out;
 }
 
