@@ -392,9 +392,10 @@ class Improver {
       centroid = c / area;
       return true;
     };
+    // The movers' own rings are done below, with their centroids.
     tbb::parallel_for(std::size_t(0), ring.size(), [&](std::size_t i) {
       glm::dvec3 unused;
-      ring_of(VH(int(ring[i])), unused);
+      if (!wanted[ring[i]]) ring_of(VH(int(ring[i])), unused);
     });
     tbb::parallel_for(std::size_t(0), who.size(), [&](std::size_t i) {
       const VH v(static_cast<int>(who[i]));  // not VH v(int(x)): clang reads that as a function
