@@ -19,10 +19,11 @@
 // collapsed, so creases stay sharp and open patches keep their rims.
 //
 // The mesh is cut into slabs of about 16k triangles along its longest axis; the slabs are
-// worked on in parallel with their rims locked, then the band between them (three rings wide)
-// on its own. Deterministic: the slabs depend on the mesh alone, never on the thread count; in a
-// slab the topological steps visit the mesh in a fixed order and the relaxation is a Jacobi step
-// (every vertex moves from the previous positions).
+// worked on in parallel with their rims locked, then the bands between them (three rings wide),
+// in parallel too, each connected band on its own. Deterministic: the slabs and bands depend on
+// the mesh alone, never on the thread count; in a slab the topological steps visit the mesh in a
+// fixed order and the relaxation is a Jacobi step (every vertex moves from the previous
+// positions).
 #pragma once
 
 #include "meshers/batch_field.hpp"

@@ -1,5 +1,7 @@
 #include "meshers/self_intersections.hpp"
 
+#include "meshers/box_pairs.hpp"
+
 #include <embree3/rtcore.h>
 #include <glm/common.hpp>
 #include <glm/geometric.hpp>
@@ -391,7 +393,8 @@ struct Buckets {
   std::vector<std::uint32_t> second;
 };
 
-Buckets bucket_pairs(const PairLists& found, std::size_t n) {
+template <class Lists>
+Buckets bucket_pairs(const Lists& found, std::size_t n) {
   Buckets b{std::vector<std::size_t>(n + 1, 0), {}};
   for (const auto& v : found)
     for (const std::uint64_t p : v) ++b.start[(p >> 32) + 1];
@@ -408,8 +411,9 @@ void check_embree(RTCDevice device, const char* what) {
     throw std::runtime_error(std::string("find_self_intersections: Embree could not ") + what);
 }
 
-/// The pairs i < j of non-degenerate triangles whose boxes overlap, bucketed by i.
-Buckets candidate_pairs(const std::vector<Tri>& tris) {
+/// The pairs i < j of non-degenerate triangles whose boxes overlap, bucketed by i, from Embree's
+/// self-collision of a box hierarchy.
+Buckets hierarchy_pairs(const std::vector<Tri>& tris) {
   std::unique_ptr<RTCDeviceTy, decltype(&rtcReleaseDevice)> device(rtcNewDevice(nullptr), rtcReleaseDevice);
   if (!device) throw std::runtime_error("find_self_intersections: cannot create an Embree device");
   std::vector<RTCBounds> boxes(tris.size());
@@ -430,6 +434,21 @@ Buckets candidate_pairs(const std::vector<Tri>& tris) {
   rtcCollide(scene.get(), scene.get(), on_collide, &c);
   check_embree(device.get(), "collide the boxes");
   return bucket_pairs(c.found, tris.size());
+}
+
+/// The same pairs from a uniform grid when the triangles are of a size, as a mesh's are
+/// (meshers/box_pairs.hpp: no hierarchy to build, no leaf pairs to filter; on the quality pass's
+/// 81k-triangle snake 29 ms against 72), else from the hierarchy.
+Buckets candidate_pairs(const std::vector<Tri>& tris) {
+  std::vector<dvec3> lo(tris.size()), hi(tris.size());
+  std::vector<std::uint8_t> skip(tris.size());
+  tbb::parallel_for(std::size_t(0), tris.size(), [&](std::size_t t) {
+    const Tri& r = tris[t];
+    lo[t] = glm::min(r.v[0], glm::min(r.v[1], r.v[2])), hi[t] = glm::max(r.v[0], glm::max(r.v[1], r.v[2]));
+    skip[t] = r.axis < 0;
+  });
+  if (const auto lists = grid_box_pairs(lo, hi, skip)) return bucket_pairs(*lists, tris.size());
+  return hierarchy_pairs(tris);
 }
 
 /// Each bucket i sorted and deduplicated, then the j that intersect i moved to its front, in

@@ -1,7 +1,9 @@
 // Self-intersections: the pairs of triangles of a mesh that meet where the mesh's connectivity
-// says they should not. Candidate pairs come from Embree's rtcCollide over the triangles'
-// bounding boxes; each candidate is decided by exact geometric predicates, so the answer does
-// not depend on rounding, thread count or triangle order (beyond the numbering of the output).
+// says they should not. Candidate pairs are the triangles whose bounding boxes overlap, from a
+// uniform grid when the triangles are of a size (meshers/box_pairs.hpp), else from Embree's
+// rtcCollide over the boxes; each candidate is decided by exact geometric predicates, so the
+// answer does not depend on rounding, thread count or triangle order (beyond the numbering of the
+// output).
 //
 // What counts, for two non-degenerate triangles A and B (closed point sets):
 //   share no vertex     A and B share any point (crossing, touching, a T-junction, coplanar
@@ -46,10 +48,11 @@ struct SelfIntersections {
 /// Finds the pairs of triangles of `mesh` whose closed point sets intersect beyond what their
 /// shared vertices or edge imply (see the rules at the top of this file).
 ///
-/// Indices must be valid and positions finite. Complexity: O(n log n) for the box hierarchy plus
-/// O(k) exact tests for the k pairs of triangles whose bounding boxes overlap (for a reasonable
-/// surface mesh k is a small multiple of n). Uses the TBB thread pool (Embree's collision
-/// traversal and a parallel loop over the candidates); memory O(n + k). Thread safety: reads
+/// Indices must be valid and positions finite. Complexity: O(n) for the grid (O(n log n) for the
+/// box hierarchy where the grid declines) plus O(k) exact tests for the k pairs of triangles
+/// whose bounding boxes overlap (for a reasonable surface mesh k is a small multiple of n). Uses
+/// the TBB thread pool (the grid's or Embree's pair search and a parallel loop over the
+/// candidates); memory O(n + k). Thread safety: reads
 /// `mesh` only, keeps no state; concurrent calls are safe. Throws std::runtime_error when Embree
 /// cannot create its device or build its hierarchy.
 SelfIntersections find_self_intersections(const TriangleMesh& mesh, std::size_t max_examples = 16);

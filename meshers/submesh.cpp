@@ -1,5 +1,7 @@
 #include "meshers/submesh.hpp"
 
+#include "meshers/union_find.hpp"
+
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -54,6 +56,25 @@ void widen_past_pinches(const TriangleMesh& mesh, std::vector<std::uint8_t>& tak
   }
 }
 
+// Where OpenMesh's garbage collection puts the elements that survive (new index -> old): it
+// fills the first hole with the last survivor, and so on inward. Computed without moving
+// anything, so the output is numbered as a collected mesh would be without collecting it.
+template <class Deleted>
+std::vector<int> collected_order(int n, Deleted deleted) {
+  std::vector<int> order(std::size_t(std::max(n, 0)));
+  for (int i = 0; i < n; ++i) order[std::size_t(i)] = i;
+  if (n == 0) return order;
+  int i0 = 0, i1 = n - 1;
+  for (;;) {
+    while (!deleted(order[std::size_t(i0)]) && i0 < i1) ++i0;
+    while (deleted(order[std::size_t(i1)]) && i0 < i1) --i1;
+    if (i0 >= i1) break;
+    std::swap(order[std::size_t(i0)], order[std::size_t(i1)]);
+  }
+  order.resize(std::size_t(deleted(order[std::size_t(i0)]) ? i0 : i0 + 1));
+  return order;
+}
+
 }  // namespace
 
 Pieces take_pieces(const TriangleMesh& mesh, std::vector<std::uint32_t> piece_of, std::size_t count) {
@@ -106,18 +127,34 @@ Pieces take_pieces(const TriangleMesh& mesh, std::vector<std::uint32_t> piece_of
   return out;
 }
 
-Pieces take_region(const TriangleMesh& mesh, std::span<const std::uint8_t> region) {
+Pieces take_region(const TriangleMesh& mesh, std::span<const std::uint8_t> region, bool apart) {
   std::vector<std::uint8_t> taken(mesh.triangles.size(), 0);
   for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
     const glm::uvec3 tri = mesh.triangles[t];
     taken[t] = region[tri[0]] || region[tri[1]] || region[tri[2]];
   }
   widen_past_pinches(mesh, taken);
-  std::vector<std::uint32_t> piece_of(mesh.triangles.size());
-  for (std::size_t t = 0; t < taken.size(); ++t) piece_of[t] = taken[t] ? 0u : ~0u;
-  Pieces out = take_pieces(mesh, std::move(piece_of), 1);
-  Submesh& sub = out.parts[0];
-  for (std::size_t v = 0; v < sub.rim.size(); ++v) sub.rim[v] |= !region[sub.origin[v]];
+  std::vector<std::uint32_t> piece_of(mesh.triangles.size(), ~0u);
+  std::size_t count = 1;
+  if (apart) {
+    // Pieces apart share no vertex, so each is free of pinches as the whole is.
+    UnionFind sets(mesh.positions.size());
+    for (std::size_t t = 0; t < taken.size(); ++t)
+      if (taken[t]) sets.unite(mesh.triangles[t][0], mesh.triangles[t][1]), sets.unite(mesh.triangles[t][0], mesh.triangles[t][2]);
+    std::vector<std::uint32_t> piece(mesh.positions.size(), ~0u);
+    count = 0;
+    for (std::size_t t = 0; t < taken.size(); ++t) {
+      if (!taken[t]) continue;
+      std::uint32_t& p = piece[sets.find(mesh.triangles[t][0])];
+      if (p == ~0u) p = std::uint32_t(count++);
+      piece_of[t] = p;
+    }
+  } else {
+    for (std::size_t t = 0; t < taken.size(); ++t) piece_of[t] = taken[t] ? 0u : ~0u;
+  }
+  Pieces out = take_pieces(mesh, std::move(piece_of), count);
+  for (Submesh& sub : out.parts)
+    for (std::size_t v = 0; v < sub.rim.size(); ++v) sub.rim[v] |= !region[sub.origin[v]];
   return out;
 }
 
@@ -161,6 +198,10 @@ bool to_openmesh(const TriangleMesh& mesh, std::span<const std::uint8_t> locked,
   m.request_face_status();
   m.add_property(locked_prop);
   m.add_property(origin_prop);
+  // Room for every element up front (a closed mesh has 3/2 edges a face, a rim a few more):
+  // the arrays and their properties do not grow and copy face by face.
+  const std::size_t nf = mesh.triangles.size();
+  m.reserve(mesh.positions.size(), nf + nf / 2 + mesh.positions.size() / 8, nf);
   for (std::size_t v = 0; v < mesh.positions.size(); ++v) {
     const glm::dvec3& p = mesh.positions[v];
     const auto h = m.add_vertex({p.x, p.y, p.z});
@@ -174,23 +215,26 @@ bool to_openmesh(const TriangleMesh& mesh, std::span<const std::uint8_t> locked,
   return true;
 }
 
-void from_openmesh(TriMesh& m, OpenMesh::VPropHandleT<std::uint32_t> origin, TriangleMesh& out,
+void from_openmesh(const TriMesh& m, OpenMesh::VPropHandleT<std::uint32_t> origin, TriangleMesh& out,
                    std::vector<std::uint32_t>& origins) {
-  m.garbage_collection();
-  out.positions.resize(m.n_vertices());
-  origins.resize(m.n_vertices());
-  for (const auto v : m.vertices()) {
+  const std::vector<int> vertices =
+      collected_order(int(m.n_vertices()), [&](int v) { return m.status(TriMesh::VertexHandle(v)).deleted(); });
+  const std::vector<int> faces =
+      collected_order(int(m.n_faces()), [&](int f) { return m.status(TriMesh::FaceHandle(f)).deleted(); });
+  std::vector<std::uint32_t> index(m.n_vertices(), ~0u);
+  out.positions.resize(vertices.size());
+  origins.resize(vertices.size());
+  for (std::size_t i = 0; i < vertices.size(); ++i) {
+    const TriMesh::VertexHandle v(vertices[i]);
     const auto& p = m.point(v);
-    out.positions[std::size_t(v.idx())] = {p[0], p[1], p[2]};
-    origins[std::size_t(v.idx())] = m.property(origin, v);
+    out.positions[i] = {p[0], p[1], p[2]};
+    origins[i] = m.property(origin, v);
+    index[std::size_t(vertices[i])] = std::uint32_t(i);
   }
-  out.triangles.clear();
-  out.triangles.reserve(m.n_faces());
-  for (const auto f : m.faces()) {
-    glm::uvec3 t;
+  out.triangles.resize(faces.size());
+  for (std::size_t i = 0; i < faces.size(); ++i) {
     int k = 0;
-    for (const auto v : m.fv_range(f)) t[k++] = std::uint32_t(v.idx());
-    out.triangles.push_back(t);
+    for (const auto v : m.fv_range(TriMesh::FaceHandle(faces[i]))) out.triangles[i][k++] = index[std::size_t(v.idx())];
   }
 }
 

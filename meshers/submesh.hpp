@@ -27,8 +27,10 @@ struct Pieces {
 
 /// Takes the triangles with a corner in `region` (one flag per vertex) as one part. Where the
 /// taken triangles would touch themselves at a vertex (a pinch OpenMesh cannot hold), the whole
-/// fan of that vertex is taken too.
-Pieces take_region(const TriangleMesh& mesh, std::span<const std::uint8_t> region);
+/// fan of that vertex is taken too. With `apart`, each connected piece of the taken triangles
+/// (through shared vertices) is a part of its own, numbered by its first triangle, so that they
+/// can be worked on in parallel.
+Pieces take_region(const TriangleMesh& mesh, std::span<const std::uint8_t> region, bool apart = false);
 
 /// Takes `count` parts: triangle t goes to part piece_of[t], or stays in `rest` when that is ~0u.
 /// Where a part would touch itself at a vertex, its triangles at that vertex stay in `rest`.
@@ -48,9 +50,10 @@ void put_back(TriangleMesh& mesh, const Pieces& pieces, std::span<const Triangle
 bool to_openmesh(const TriangleMesh& mesh, std::span<const std::uint8_t> locked, std::span<const std::uint32_t> origin,
                  TriMesh& m, OpenMesh::VPropHandleT<bool>& locked_prop, OpenMesh::VPropHandleT<std::uint32_t>& origin_prop);
 
-/// A reworked OpenMesh region back in flat arrays: garbage-collects `m`, then writes its vertices
-/// and triangles in handle order and each vertex's `origin` property.
-void from_openmesh(TriMesh& m, OpenMesh::VPropHandleT<std::uint32_t> origin, TriangleMesh& out,
+/// A reworked OpenMesh region back in flat arrays: its vertices and triangles numbered as
+/// `m.garbage_collection()` would number them (without collecting: `m` is left as it is), and each
+/// vertex's `origin` property.
+void from_openmesh(const TriMesh& m, OpenMesh::VPropHandleT<std::uint32_t> origin, TriangleMesh& out,
                    std::vector<std::uint32_t>& origins);
 
 }  // namespace ht
