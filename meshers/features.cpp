@@ -201,9 +201,13 @@ CreaseStats split_creases(TriangleMesh& mesh, std::span<const glm::vec3> normals
                    plausible_point(e, points[e]);
   }
   // A crease turns the normal at one line: the sheets' planes nearer to it still differ by as
-  // much as the ends' (and by more than the sharp angle). A surface that turns along the whole
-  // edge (a rounded ridge, or a faceted scan whose facets each turn a little) does not: its
-  // probes' normals lie in between. Such an edge is no crease, whatever its ends say.
+  // much as the ends' (and by more than the sharp angle). A faceted scan whose facets each turn
+  // a little does not: its probes' normals lie in between. Such an edge is no crease, whatever
+  // its ends say. Only mesh leaves have such normals, piecewise constant: a field's own normals
+  // turn smoothly, and a ridge tighter than the cell is split on purpose (the split halves its
+  // chamfer; random trees with local blends over crops measured 20% more face error without).
+  const bool faceted = std::any_of(eval.tape().code.begin(), eval.tape().code.end(),
+                                   [](const Instruction& i) { return i.op == OpCode::Mesh; });
   std::vector<std::uint8_t> spread(edges.size(), 0);
   auto bend_stays_sharp = [&](std::size_t e) {
     const double c = glm::dot(plane_normal[e][0], plane_normal[e][1]);
@@ -228,7 +232,7 @@ CreaseStats split_creases(TriangleMesh& mesh, std::span<const glm::vec3> normals
         plane_point[e][s] = probes[2 * e + s] - ((values[2 * e + s] - T) / g2) * g;  // a Newton step onto the surface
         plane_normal[e][s] = n;
       }
-      if (!bend_stays_sharp(e)) {
+      if (faceted && !bend_stays_sharp(e)) {
         plausible[e] = 0;
         spread[e] = 1;
         continue;
@@ -250,10 +254,10 @@ CreaseStats split_creases(TriangleMesh& mesh, std::span<const glm::vec3> normals
     if (!plausible[e] || !(off <= options.max_error * h)) continue;
     const glm::dvec3 n = -grads[e] / g, bisector = glm::normalize(plane_normal[e][0] + plane_normal[e][1]);
     const bool mesh_edge = glm::dot(n, bisector) >= cos_degrees(kBisectorDegrees) && off <= kOnEdge * h;
-    active[e] = mesh_edge || !between_sheets(n, plane_normal[e][0], plane_normal[e][1]);
+    active[e] = !faceted || mesh_edge || !between_sheets(n, plane_normal[e][0], plane_normal[e][1]);
     if (!active[e]) ++stats.spread_edges;
   }
-  confirm_jumps(eval, P, edges, points, plane_normal, active, stats);
+  if (faceted) confirm_jumps(eval, P, edges, points, plane_normal, active, stats);
   // An end lying on the other end's tangent plane is on the crease already (a crease through
   // grid points: marching tetrahedra put it there). The edge does not cross the crease, it ends
   // on it: no split. That end is a crease point, and its normal is one sheet's only.

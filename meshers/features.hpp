@@ -11,11 +11,12 @@
 //    of that line nearest the edge's midpoint is where the crease crosses between them. The
 //    point is used only when it lies between the ends and on the surface (|f - T| / |grad f| at
 //    most `max_error` cells), so smooth regions are left alone.
-//  - The bend must be where that point says: the sheets' normals probed a third of the way from
+//  - With mesh leaves in the field (their pseudo-normals are piecewise constant), the bend must
+//    be where that point says: the sheets' normals probed a third of the way from
 //    it toward each end must still differ by most of the ends' difference and by more than
-//    `sharp_angle`. A surface that turns along the whole edge (a rounded ridge, or a faceted
-//    scan such as bunny00, whose facets turn 10-25 degrees each: its pseudo-normals jump from
-//    facet to facet) fails this and keeps the edge whole. And the normal must jump at the
+//    `sharp_angle`. A surface that turns along the whole edge (a faceted scan such as bunny00,
+//    whose facets turn 10-25 degrees each: its pseudo-normals jump from facet to facet) fails
+//    this and keeps the edge whole. And the normal must jump at the
 //    crease point: there it is one sheet's (a Boolean's or a crop's seam: one operand wins), a
 //    third sheet's (a corner) or, on a mesh leaf's own sharp edge, the two facets' bisector with
 //    the point on the surface; just off it on either side, again not one in between.
