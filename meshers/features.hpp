@@ -11,6 +11,15 @@
 //    of that line nearest the edge's midpoint is where the crease crosses between them. The
 //    point is used only when it lies between the ends and on the surface (|f - T| / |grad f| at
 //    most `max_error` cells), so smooth regions are left alone.
+//  - With mesh leaves in the field (their pseudo-normals are piecewise constant), the bend must
+//    be where that point says: the sheets' normals probed a third of the way from
+//    it toward each end must still differ by most of the ends' difference and by more than
+//    `sharp_angle`. A surface that turns along the whole edge (a faceted scan such as bunny00,
+//    whose facets turn 10-25 degrees each: its pseudo-normals jump from facet to facet) fails
+//    this and keeps the edge whole. And the normal must jump at the
+//    crease point: there it is one sheet's (a Boolean's or a crop's seam: one operand wins), a
+//    third sheet's (a corner) or, on a mesh leaf's own sharp edge, the two facets' bisector with
+//    the point on the surface; just off it on either side, again not one in between.
 //  - A crease point within `snap` of an edge's end moves that end onto the crease instead (no
 //    sliver), and the edges at a moved vertex are no longer split.
 //  - Every triangle is cut along its split edges (one, two or three). A triangle with two split
@@ -57,6 +66,7 @@ void mark_suspect_cells(std::span<const float> values, int cells, const FeatureO
 
 struct CreaseStats {
   std::size_t candidate_edges = 0;  ///< edges whose end normals disagree
+  std::size_t spread_edges = 0;     ///< of those, found to bend rather than crease: left whole
   std::size_t split_edges = 0;      ///< of those, split at a valid crease point
   std::size_t moved_vertices = 0;   ///< vertices moved onto a crease point near them
   std::size_t corners = 0;          ///< corner vertices added inside triangles

@@ -72,6 +72,8 @@ PolygonizeStats total_polygonize(const MeshResult& r) {
     s.points_evaluated += p.points_evaluated;
     s.crease_edges += p.crease_edges;
     s.corner_vertices += p.corner_vertices;
+    s.crease_candidates += p.crease_candidates;
+    s.crease_spread += p.crease_spread;
     s.crease_intersections += p.crease_intersections;
     s.unfold.pairs_before += p.unfold.pairs_before;
     s.unfold.pairs_after += p.unfold.pairs_after;
@@ -178,7 +180,9 @@ std::string mesh_stats_json(const Tree& tree, const MeshRun& run, const std::str
   j["checks"] = checks_json(c);
   const PolygonizeStats stats = total_polygonize(run.result);
   j["bricks"] = {{"total", stats.bricks_total}, {"active", stats.bricks_active}};
-  j["sharp_features"] = {{"crease_edges_split", stats.crease_edges},
+  j["sharp_features"] = {{"candidate_edges", stats.crease_candidates},
+                         {"spread_edges", stats.crease_spread},
+                         {"crease_edges_split", stats.crease_edges},
                          {"corner_vertices", stats.corner_vertices},
                          {"intersecting_pairs_after_sliding", stats.unfold.pairs_before},
                          {"unfold_collapses", stats.unfold.collapses},

@@ -250,6 +250,8 @@ void crease_phase(RootField& field, const FeatureOptions& features, double h, Tr
   const TapeEvaluator& eval = field.get();
   const CreaseStats crease = split_creases(mesh, normals, eval, field.T, h, features, &on_crease);
   stats.crease_edges = crease.split_edges;
+  stats.crease_candidates = crease.candidate_edges;
+  stats.crease_spread = crease.spread_edges;
   stats.corner_vertices = crease.corners;
   if (crease.split_edges + crease.corners == 0) return;
   Aabb near;

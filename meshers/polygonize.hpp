@@ -68,6 +68,7 @@ struct PolygonizeStats {
   std::size_t bricks_total = 0, bricks_active = 0;
   std::size_t points_evaluated = 0;
   std::size_t crease_edges = 0, corner_vertices = 0;  ///< sharp features (meshers/features.hpp)
+  std::size_t crease_candidates = 0, crease_spread = 0;  ///< CreaseStats::candidate_edges, spread_edges
   std::size_t crease_intersections = 0;  ///< intersecting pairs left where the crease step ran (after unfolding)
   std::size_t quality_intersections = 0; ///< of those, pairs the quality pass made (then unfolded)
   UnfoldStats unfold;                                 ///< folds the crease step left, collapsed (meshers/unfold.hpp)
