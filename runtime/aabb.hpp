@@ -30,6 +30,14 @@ struct Aabb {
   glm::dvec3 size() const { return hi - lo; }
 };
 
+/// The box's volume: 0 when empty, infinite when unbounded.
+inline double volume(const Aabb& box) {
+  if (box.empty()) return 0.0;
+  if (!box.finite()) return std::numeric_limits<double>::infinity();
+  const glm::dvec3 s = box.size();
+  return s.x * s.y * s.z;
+}
+
 inline Aabb merge(const Aabb& a, const Aabb& b) { return {glm::min(a.lo, b.lo), glm::max(a.hi, b.hi)}; }
 inline Aabb intersect(const Aabb& a, const Aabb& b) { return {glm::max(a.lo, b.lo), glm::min(a.hi, b.hi)}; }
 

@@ -137,10 +137,12 @@ void compute_support(Graph& g, NodeId n) {
       const bool below = blended || k == NodeKind::Blend || k == NodeKind::LocalBlend;
       Aabb box;
       switch (kind_family(k)) {
-        case Family::Primitive:
-          box = skeleton_bounds(k, g.skeleton_of(n)).expanded(params::primitive(g, n).R);
-          nonneg = params::primitive(g, n).F > 0.0;
+        case Family::Primitive: {
+          const params::Primitive prim = params::primitive(g, n);
+          box = skeleton_bounds(k, g.skeleton_of(n)).expanded(prim.R);
+          nonneg = prim.F > 0.0;
           break;
+        }
         case Family::Mesh: {
           const params::MeshLeafParams m = params::mesh_leaf(g, n);
           box = g.meshes[g.mesh[n]]->bounds().expanded(m.R);

@@ -392,14 +392,16 @@ Tree optimize(const Tree& tree, const OptimizeOptions& options, OptimizeStats* s
   auto [graph, new_root] = compact(rw.writer().graph(), root);
   auto shared = std::make_shared<const Graph>(std::move(graph));
   s.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-  tbb::parallel_invoke(
-      [&] {
-        measure(tree.graph(), tree.root(), tree.threshold(), s.nodes_before, s.overlap_before, s.tape_before,
-                s.registers_before, tree.graph_ptr());
-      },
-      [&, root = new_root] {
-        measure(*shared, root, tree.threshold(), s.nodes_after, s.overlap_after, s.tape_after, s.registers_after, shared);
-      });
+  if (stats) {  // two tape compilations and an overlap sweep: only for a caller who reads them
+    tbb::parallel_invoke(
+        [&] {
+          measure(tree.graph(), tree.root(), tree.threshold(), s.nodes_before, s.overlap_before, s.tape_before,
+                  s.registers_before, tree.graph_ptr());
+        },
+        [&, root = new_root] {
+          measure(*shared, root, tree.threshold(), s.nodes_after, s.overlap_after, s.tape_after, s.registers_after, shared);
+        });
+  }
   return Tree(shared, new_root, tree.threshold(), tree.mesher_settings());
 }
 
@@ -428,7 +430,7 @@ double overlap_volume(const Graph& g, NodeId root) {
     });
     for (std::size_t i = 0; i < order.size(); ++i)
       for (std::size_t j = i + 1; j < order.size() && boxes[order[j]].lo.x <= boxes[order[i]].hi.x; ++j) {
-        const double v = optimize_detail::volume(intersect(boxes[order[i]], boxes[order[j]]));
+        const double v = volume(intersect(boxes[order[i]], boxes[order[j]]));
         if (std::isfinite(v)) total += v;
       }
   }

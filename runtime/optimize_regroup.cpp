@@ -85,13 +85,6 @@ Group build(std::span<const Aabb> boxes, std::vector<std::uint32_t> items, int f
 
 }  // namespace
 
-double volume(const Aabb& box) {
-  if (box.empty()) return 0.0;
-  if (!box.finite()) return std::numeric_limits<double>::infinity();
-  const glm::dvec3 s = box.size();
-  return s.x * s.y * s.z;
-}
-
 Group spatial_groups(std::span<const Aabb> boxes, int fanout) {
   std::vector<std::uint32_t> items(boxes.size());
   std::iota(items.begin(), items.end(), 0u);

@@ -25,7 +25,4 @@ struct Group {
 /// The hierarchy over every box; groups hold at most `fanout` (>= 2) operands or parts.
 Group spatial_groups(std::span<const Aabb> boxes, int fanout);
 
-/// Volume of a box (0 when empty, infinite when unbounded).
-double volume(const Aabb& box);
-
 }  // namespace ht::optimize_detail

@@ -34,9 +34,9 @@ class Compiler {
   int node(NodeId n, int frame, bool under_blend, const Aabb* region, int depth) {
     if (depth > kMaxDepth) throw CompileError("the tree is deeper than " + std::to_string(kMaxDepth) + " nodes");
     const Aabb& box = g_.support(n, under_blend);
-    const double volume = box_volume(box), parent = parent_volume_;
-    if (!guards_ || !guard_worthy(n, under_blend, box, volume, region)) {
-      parent_volume_ = std::isfinite(volume) ? volume : parent;
+    const double size = volume(box), parent = parent_volume_;
+    if (!guards_ || !guard_worthy(n, under_blend, box, size, region)) {
+      parent_volume_ = std::isfinite(size) ? size : parent;
       const int r = unguarded(n, frame, under_blend, region, depth);
       parent_volume_ = parent;
       return r;
@@ -47,7 +47,7 @@ class Compiler {
     const Aabb padded = box.expanded(kGuardPad * (1.0 + std::max(glm::length(box.lo), glm::length(box.hi))));
     const std::uint32_t k = constants({padded.lo.x, padded.lo.y, padded.lo.z, padded.hi.x, padded.hi.y, padded.hi.z, 0.0});
     emit_k(OpCode::Skip, n, 0, frame, k);
-    parent_volume_ = volume;
+    parent_volume_ = size;
     const int r = unguarded(n, frame, under_blend, region, depth);
     parent_volume_ = parent;
     const std::size_t length = tape_.code.size() - mark - 1;
@@ -65,12 +65,12 @@ class Compiler {
   // Is a guard worth trying around n? Operators and warps only (a leaf costs what the test
   // does), with a bounded support well inside the parent's, and not where the region of
   // interest lies inside the support anyway (the guard would never skip there).
-  bool guard_worthy(NodeId n, bool under_blend, const Aabb& box, double volume, const Aabb* region) const {
+  bool guard_worthy(NodeId n, bool under_blend, const Aabb& box, double size, const Aabb* region) const {
     const Family f = kind_family(g_.kind[n]);
     if (f != Family::Operator && f != Family::Warp) return false;
     // Not the root (no parent volume): the points asked of a tree are mostly near it.
     if (g_.kind[n] == NodeKind::Ffd || !box.finite() || !std::isfinite(parent_volume_) ||
-        !(volume < kGuardFraction * parent_volume_))
+        !(size < kGuardFraction * parent_volume_))
       return false;
     if (region && region->finite() && box.contains(region->lo) && box.contains(region->hi)) return false;
     return zero_in_float(n, under_blend);
@@ -102,13 +102,6 @@ class Compiler {
     }
     known = zero ? 1 : 0;
     return zero;
-  }
-
-  static double box_volume(const Aabb& b) {
-    if (b.empty()) return 0.0;
-    if (!b.finite()) return std::numeric_limits<double>::infinity();
-    const glm::dvec3 s = b.size();
-    return s.x * s.y * s.z;
   }
 
   int unguarded(NodeId n, int frame, bool under_blend, const Aabb* region, int depth) {
@@ -381,7 +374,7 @@ class Compiler {
         const Interval iv = field_interval(g_, c, T_, *region, true);
         return !iv.zero() && iv.lo != iv.hi;
       };
-      const bool guarded = guards_ && guard_worthy(c, true, g_.support(c, true), box_volume(g_.support(c, true)), region);
+      const bool guarded = guards_ && guard_worthy(c, true, g_.support(c, true), volume(g_.support(c, true)), region);
       if (g_.kind[c] == NodeKind::Blend && !guarded && flat()) {
         todo.push_back({c, 0});
         continue;

@@ -177,16 +177,9 @@ ValueGradient value_gradient(const Graph& g, NodeId n, double T, const glm::dvec
     case NodeKind::Bend: {
       const ValueGradient f = child(0, warp_inverse(k, prm.data(), p), under_blend);
       if (f.g == glm::dvec3(0.0)) return f;
-      // grad (f o w^-1)(p) = J^T grad f, J the Jacobian of w^-1 at p (column j: d w^-1 / dp_j).
-      const double h = step_at(p);
-      glm::dvec3 grad;
-      for (int axis = 0; axis < 3; ++axis) {
-        glm::dvec3 a = p, b = p;
-        a[axis] += h;
-        b[axis] -= h;
-        grad[axis] = glm::dot((warp_inverse(k, prm.data(), a) - warp_inverse(k, prm.data(), b)) / (2.0 * h), f.g);
-      }
-      return {f.v, grad};
+      // grad (f o w^-1)(p) = J^T grad f, J the Jacobian of w^-1 at p: the gradient of the
+      // linear function q -> grad f . w^-1(q).
+      return {f.v, central_gradient(p, [&](const glm::dvec3& q) { return glm::dot(warp_inverse(k, prm.data(), q), f.g); })};
     }
     default: {  // skeletal primitives
       auto field = [&](const glm::dvec3& q) { return falloff(skeleton_distance(k, g.skeleton_of(n), q), prm[kPrimR], prm[kPrimF]); };
