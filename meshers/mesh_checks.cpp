@@ -4,6 +4,7 @@
 
 #include "meshers/self_intersections.hpp"
 #include "meshers/surface_field.hpp"
+#include "nodes/mesh_leaf.hpp"
 #include "runtime/tape_eval.hpp"
 
 #include <glm/geometric.hpp>
@@ -12,12 +13,34 @@
 #include <cmath>
 #include <numbers>
 #include <numeric>
+#include <tuple>
 #include <vector>
 
 namespace ht {
 namespace {
 
 constexpr std::uint32_t kNoIndex = ~0u;
+
+// Degrees.
+double smallest_angle(const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& d) {
+  double amin = 180.0;
+  const glm::dvec3 v[3] = {a, b, d};
+  for (int k = 0; k < 3; ++k) {
+    const glm::dvec3 e1 = v[(k + 1) % 3] - v[k], e2 = v[(k + 2) % 3] - v[k];
+    const double ang = std::atan2(glm::length(glm::cross(e1, e2)), glm::dot(e1, e2)) * 180.0 / std::numbers::pi;
+    amin = std::min(amin, ang);
+  }
+  return amin;
+}
+
+// The smallest value and the first percentile of `angles` (reordered); zeros when empty.
+std::pair<double, double> min_and_p1(std::vector<float>& angles) {
+  if (angles.empty()) return {0.0, 0.0};
+  const auto at = angles.begin() + std::ptrdiff_t(angles.size() / 100);
+  std::nth_element(angles.begin(), at, angles.end());
+  const double p1 = *at;
+  return {*std::min_element(angles.begin(), at + 1), p1};
+}
 
 }  // namespace
 
@@ -142,22 +165,12 @@ MeshChecks check_mesh(const TriangleMesh& mesh, bool self_intersections) {
     c.area += 0.5 * area2;
     c.volume += glm::dot(a, glm::cross(b, d)) / 6.0;
     if (area2 <= 1e-14 * scale * scale) ++c.degenerate_triangles;
-    double amin = 180.0;
-    const glm::dvec3 v[3] = {a, b, d};
-    for (int k = 0; k < 3; ++k) {
-      const glm::dvec3 e1 = v[(k + 1) % 3] - v[k], e2 = v[(k + 2) % 3] - v[k];
-      const double ang = std::atan2(glm::length(glm::cross(e1, e2)), glm::dot(e1, e2)) * 180.0 / std::numbers::pi;
-      amin = std::min(amin, ang);
-    }
+    const double amin = smallest_angle(a, b, d);
     c.min_angle = std::min(c.min_angle, amin);
     ++c.min_angle_histogram[std::min<std::size_t>(5, static_cast<std::size_t>(amin / 10.0))];
     smallest.push_back(float(amin));
   }
-  if (!smallest.empty()) {
-    const auto at = smallest.begin() + std::ptrdiff_t(smallest.size() / 100);
-    std::nth_element(smallest.begin(), at, smallest.end());
-    c.min_angle_p1 = *at;
-  }
+  if (!smallest.empty()) c.min_angle_p1 = min_and_p1(smallest).second;
   if (!T.empty() && self_intersections) c.self_intersecting_pairs = find_self_intersections(mesh, 0).pairs;
   return c;
 }
@@ -165,8 +178,58 @@ MeshChecks check_mesh(const TriangleMesh& mesh, bool self_intersections) {
 namespace {
 
 // f and grad f come from `gradient(points, values, gradients)`.
+// Flags the triangles across which the gradient turns by more than kCreaseTurnDegrees (between
+// any two of its corners' and its centre's), and every triangle sharing a vertex with one.
+std::vector<std::uint8_t> crease_triangles(const TriangleMesh& mesh, std::span<const glm::dvec3> at_vertices,
+                                           std::span<const glm::dvec3> at_centres) {
+  const double cos_turn = std::cos(kCreaseTurnDegrees * std::numbers::pi / 180.0);
+  auto turns = [&](glm::dvec3 a, glm::dvec3 b) {
+    const double la = glm::length(a), lb = glm::length(b);
+    return la > 0 && lb > 0 && glm::dot(a, b) < cos_turn * la * lb;
+  };
+  std::vector<std::uint8_t> near_vertex(mesh.positions.size(), 0), out(mesh.triangles.size(), 0);
+  for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+    const auto& tri = mesh.triangles[t];
+    const glm::dvec3 g[4] = {at_vertices[tri[0]], at_vertices[tri[1]], at_vertices[tri[2]], at_centres[t]};
+    bool turned = false;
+    for (int i = 0; i < 4 && !turned; ++i)
+      for (int j = i + 1; j < 4 && !turned; ++j) turned = turns(g[i], g[j]);
+    if (turned)
+      for (int k = 0; k < 3; ++k) near_vertex[tri[k]] = 1;
+  }
+  for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+    const auto& tri = mesh.triangles[t];
+    out[t] = near_vertex[tri[0]] | near_vertex[tri[1]] | near_vertex[tri[2]];
+  }
+  return out;
+}
+
+// The angle census of MeshChecks: kept, crease and smooth triangles.
+void angle_census(const TriangleMesh& mesh, std::span<const std::uint8_t> kept, std::span<const std::uint8_t> crease,
+                  MeshChecks& c) {
+  std::vector<float> made, smooth;
+  c.kept_triangles = c.crease_triangles = 0;
+  for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+    if (!kept.empty() && kept[t]) {
+      ++c.kept_triangles;
+      continue;
+    }
+    const auto& tri = mesh.triangles[t];
+    const auto a = float(smallest_angle(mesh.positions[tri[0]], mesh.positions[tri[1]], mesh.positions[tri[2]]));
+    made.push_back(a);
+    if (crease[t])
+      ++c.crease_triangles;
+    else
+      smooth.push_back(a);
+  }
+  c.smooth_triangles = smooth.size();
+  std::tie(c.made_min_angle, c.made_min_angle_p1) = min_and_p1(made);
+  std::tie(c.smooth_min_angle, c.smooth_min_angle_p1) = min_and_p1(smooth);
+}
+
 template <class Gradient>
-void surface_error(const TriangleMesh& mesh, Gradient&& gradient, double T, MeshChecks& c) {
+void surface_error(const TriangleMesh& mesh, Gradient&& gradient, double T, MeshChecks& c,
+                   std::span<const std::uint8_t> kept) {
   std::vector<double> f;
   std::vector<glm::dvec3> g;
   auto measure = [&](const std::vector<glm::dvec3>& pts, double& max, double& mean) {
@@ -185,6 +248,7 @@ void surface_error(const TriangleMesh& mesh, Gradient&& gradient, double T, Mesh
     mean = sum / double(pts.size());
   };
   measure(mesh.positions, c.vertex_error_max, c.vertex_error_mean);
+  const std::vector<glm::dvec3> at_vertices = g;
   std::vector<glm::dvec3> centres(mesh.triangles.size());
   for (std::size_t t = 0; t < centres.size(); ++t) {
     const auto& tri = mesh.triangles[t];
@@ -203,16 +267,40 @@ void surface_error(const TriangleMesh& mesh, Gradient&& gradient, double T, Mesh
       c.inverted_area += 0.5 * glm::length(n);
     }
   }
+  if (mesh.positions.empty()) return;
+  angle_census(mesh, kept, crease_triangles(mesh, at_vertices, g), c);
 }
 
 }  // namespace
 
-void measure_surface_error(const TriangleMesh& mesh, const TapeEvaluator& tape, double T, MeshChecks& c) {
-  surface_error(mesh, [&](const auto& p, auto& f, auto& g) { tape.gradient(p, f, g); }, T, c);
+void measure_surface_error(const TriangleMesh& mesh, const TapeEvaluator& tape, double T, MeshChecks& c,
+                           std::span<const std::uint8_t> kept) {
+  surface_error(mesh, [&](const auto& p, auto& f, auto& g) { tape.gradient(p, f, g); }, T, c, kept);
 }
 
-void measure_surface_error(const TriangleMesh& mesh, SurfaceField& field, MeshChecks& c) {
-  surface_error(mesh, [&](const auto& p, auto& f, auto& g) { field.gradient(p, f, g); }, field.threshold(), c);
+void measure_surface_error(const TriangleMesh& mesh, SurfaceField& field, MeshChecks& c,
+                           std::span<const std::uint8_t> kept) {
+  surface_error(mesh, [&](const auto& p, auto& f, auto& g) { field.gradient(p, f, g); }, field.threshold(), c, kept);
+}
+
+std::vector<std::uint8_t> kept_leaf_triangles(const TriangleMesh& mesh,
+                                              std::span<const std::shared_ptr<const MeshLeaf>> leaves) {
+  auto less = [](const glm::dvec3& a, const glm::dvec3& b) {
+    return a.x != b.x ? a.x < b.x : a.y != b.y ? a.y < b.y : a.z < b.z;
+  };
+  std::vector<glm::dvec3> corners;
+  for (const auto& leaf : leaves)
+    if (leaf) corners.insert(corners.end(), leaf->positions().begin(), leaf->positions().end());
+  std::sort(corners.begin(), corners.end(), less);
+  std::vector<std::uint8_t> on_leaf(mesh.positions.size(), 0), out(mesh.triangles.size(), 0);
+  if (corners.empty()) return out;
+  for (std::size_t v = 0; v < mesh.positions.size(); ++v)
+    on_leaf[v] = std::binary_search(corners.begin(), corners.end(), mesh.positions[v], less);
+  for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+    const auto& tri = mesh.triangles[t];
+    out[t] = on_leaf[tri[0]] & on_leaf[tri[1]] & on_leaf[tri[2]];
+  }
+  return out;
 }
 
 }  // namespace ht

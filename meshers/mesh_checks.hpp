@@ -9,9 +9,14 @@
 
 #include <array>
 #include <cstddef>
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <vector>
 
 namespace ht {
 
+class MeshLeaf;
 class SurfaceField;
 class TapeEvaluator;
 
@@ -37,6 +42,14 @@ struct MeshChecks {
   /// too thin for their orientation to matter (their area tells which).
   std::size_t inverted_faces = 0;
   double inverted_area = 0;
+  // Where the small angles are, filled by measure_surface_error() too. Kept triangles are a mesh
+  // leaf's own (all three corners are its vertices, bit for bit): their shapes are the input's.
+  // The made ones are HybridTree's; of those, crease triangles are within one ring of a triangle
+  // across which grad f turns by more than kCreaseTurnDegrees (corners and centre compared), and
+  // the rest are smooth. Angles in degrees; p1 is the first percentile; 0 when there are none.
+  std::size_t kept_triangles = 0, crease_triangles = 0, smooth_triangles = 0;
+  double made_min_angle = 0, made_min_angle_p1 = 0;
+  double smooth_min_angle = 0, smooth_min_angle_p1 = 0;
   /// Pairs of triangles that intersect beyond their shared vertices or edge: crossings, touching
   /// at a point they do not share, folds (see meshers/self_intersections.hpp). Exact.
   std::size_t self_intersecting_pairs = 0;
@@ -56,10 +69,21 @@ struct MeshChecks {
 /// candidate pairs.
 MeshChecks check_mesh(const TriangleMesh& mesh, bool self_intersections = true);
 
-/// Fills the surface-error fields of `checks` by evaluating f and grad f with the tape at T.
-void measure_surface_error(const TriangleMesh& mesh, const TapeEvaluator& tape, double threshold, MeshChecks& checks);
+/// How far grad f turns across a triangle that MeshChecks counts as a crease triangle.
+inline constexpr double kCreaseTurnDegrees = 30.0;
+
+/// Fills the surface-error and angle-census fields of `checks` by evaluating f and grad f with
+/// the tape at T. `kept` is empty or holds one flag per triangle (kept_leaf_triangles()).
+void measure_surface_error(const TriangleMesh& mesh, const TapeEvaluator& tape, double threshold, MeshChecks& checks,
+                           std::span<const std::uint8_t> kept = {});
 /// The same with the field's tapes specialized to bricks (meshers/surface_field.hpp): the same
 /// figures to float rounding, at a fraction of the cost on a big tree.
-void measure_surface_error(const TriangleMesh& mesh, SurfaceField& field, MeshChecks& checks);
+void measure_surface_error(const TriangleMesh& mesh, SurfaceField& field, MeshChecks& checks,
+                           std::span<const std::uint8_t> kept = {});
+
+/// One flag per triangle of `mesh`: its three corners are vertices of one of `leaves`' meshes,
+/// bit for bit (a triangle kept from the user's mesh). Linear in the meshes' sizes.
+std::vector<std::uint8_t> kept_leaf_triangles(const TriangleMesh& mesh,
+                                              std::span<const std::shared_ptr<const MeshLeaf>> leaves);
 
 }  // namespace ht

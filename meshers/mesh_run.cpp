@@ -123,7 +123,14 @@ nlohmann::json checks_json(const MeshChecks& c) {
           {"surface_error_face_mean", c.face_error_mean},
           {"self_intersecting_pairs", c.self_intersecting_pairs},
           {"inverted_faces", c.inverted_faces},
-          {"inverted_area", c.inverted_area}};
+          {"inverted_area", c.inverted_area},
+          {"angles", {{"kept_triangles", c.kept_triangles},
+                      {"made_min_degrees", c.made_min_angle},
+                      {"made_p1_degrees", c.made_min_angle_p1},
+                      {"crease_triangles", c.crease_triangles},
+                      {"smooth_triangles", c.smooth_triangles},
+                      {"smooth_min_degrees", c.smooth_min_angle},
+                      {"smooth_p1_degrees", c.smooth_min_angle_p1}}}};
 }
 
 }  // namespace
@@ -152,7 +159,8 @@ MeshRun run_mesh(const Tree& tree, const MeshRunOptions& o) {
     // would pay for every primitive at each of the vertices and face centres.
     SurfaceField field(run.result.tree->graph_ptr(), run.result.tree->root(), tree.threshold(),
                        mesh.positions.front(), 8.0 * options.precision);
-    measure_surface_error(mesh, field, run.checks);
+    const auto kept = kept_leaf_triangles(mesh, run.result.tree->graph().meshes);
+    measure_surface_error(mesh, field, run.checks, kept);
   }
   run.check_seconds = std::chrono::duration<double>(clock::now() - t2).count();
   return run;

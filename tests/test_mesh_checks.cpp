@@ -1,0 +1,100 @@
+// The angle census of the mesh checks (meshers/mesh_checks.hpp): which triangles are a mesh
+// leaf's own, which lie at a crease, and that the smooth ones' figures are the ones left.
+#include "meshers/mesh_checks.hpp"
+#include "meshers/mesh_run.hpp"
+#include "nodes/mesh_leaf.hpp"
+#include "runtime/builder.hpp"
+#include "tests/support/test_support.hpp"
+
+#include <glm/geometric.hpp>
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+namespace ht {
+namespace {
+
+constexpr double kT = 0.5;
+
+TEST(MeshChecks, KeptTrianglesAreTheLeafsOwnBitForBit) {
+  const auto leaf = MeshLeaf::load(test::cgal_mesh("eight.off"));
+  TriangleMesh mesh = *leaf->surface();
+  const std::vector<std::shared_ptr<const MeshLeaf>> leaves{leaf};
+  auto count = [](const std::vector<std::uint8_t>& f) { return std::size_t(std::count(f.begin(), f.end(), 1)); };
+  EXPECT_EQ(count(kept_leaf_triangles(mesh, leaves)), mesh.triangles.size());
+  // One vertex moved by one ulp: the triangles around it are no longer the leaf's.
+  const std::uint32_t v = mesh.triangles[0][0];
+  std::size_t fan = 0;
+  for (const auto& t : mesh.triangles) fan += (t[0] == v || t[1] == v || t[2] == v);
+  mesh.positions[v].x = std::nextafter(mesh.positions[v].x, 1e300);
+  EXPECT_EQ(count(kept_leaf_triangles(mesh, leaves)), mesh.triangles.size() - fan);
+  EXPECT_EQ(count(kept_leaf_triangles(mesh, {})), 0u);
+}
+
+TEST(MeshChecks, LeafBlendedWithABallKeepsItsFarTriangles) {
+  // The leaf's own triangles away from the ball are counted kept; the patch the blend made is not.
+  const auto leaf = MeshLeaf::load(test::cgal_mesh("eight.off"));
+  Builder b(kT);
+  const Aabb box = leaf->bounds();
+  const glm::dvec3 top{0.5 * (box.lo.x + box.hi.x), box.hi.y, 0.5 * (box.lo.z + box.hi.z)};
+  const double size = glm::length(box.hi - box.lo);
+  const Tree t = b.build(b.blend({b.mesh(leaf, {0.02 * size}), b.point(top, {0.1 * size})}));
+  MeshRunOptions o;
+  o.precision = 0.01 * size;
+  const MeshRun run = run_mesh(t, o);
+  const MeshChecks& c = run.checks;
+  EXPECT_GT(c.kept_triangles, leaf->triangles().size() / 2);
+  EXPECT_LT(c.kept_triangles, leaf->triangles().size());
+  EXPECT_EQ(c.kept_triangles + c.crease_triangles + c.smooth_triangles, c.triangles);
+  EXPECT_GT(c.smooth_triangles, 0u);
+}
+
+TEST(MeshChecks, CreaseTrianglesLieAlongTheCrease) {
+  // A ball minus a ball with min/max: the crease is the circle where the two spheres meet. Every
+  // The crease triangles are about as many as the triangles with a corner near both spheres;
+  // a ball alone has no crease triangle.
+  const glm::dvec3 c1{-0.2, 0, 0}, c2{0.4, 0.05, 0.1};
+  const double h = 0.03;
+  Builder b(kT);
+  const Tree ball = b.build(b.point(c1, {1.0}));
+  PolygonizeOptions po;
+  po.precision = h;
+  const test::Polygonized alone = test::polygonize_checked(ball, po);
+  EXPECT_EQ(alone.checks.crease_triangles, 0u);
+  EXPECT_EQ(alone.checks.smooth_triangles, alone.checks.triangles);
+
+  Builder b2(kT);
+  const Tree carved = b2.build(b2.subtract({b2.point(c1, {1.0}), b2.point(c2, {0.8})}, BooleanMode::MinMax));
+  const test::Polygonized r = test::polygonize_checked(carved, po);
+  const MeshChecks& c = r.checks;
+  ASSERT_GT(c.crease_triangles, 0u);
+  EXPECT_LT(c.crease_triangles, c.triangles / 4);
+  EXPECT_EQ(c.crease_triangles + c.smooth_triangles, c.triangles);
+  // The spheres' radii as meshed: the outer one is the farthest vertex from c1, the dent's the
+  // median distance to c2 of the vertices well inside the outer sphere.
+  const auto& P = r.mesh.positions;
+  double r1 = 0;
+  for (const auto& p : P) r1 = std::max(r1, glm::length(p - c1));
+  std::vector<double> d2;
+  for (const auto& p : P)
+    if (glm::length(p - c1) < r1 - 3 * h) d2.push_back(glm::length(p - c2));
+  ASSERT_FALSE(d2.empty());
+  std::nth_element(d2.begin(), d2.begin() + std::ptrdiff_t(d2.size() / 2), d2.end());
+  const double r2 = d2[d2.size() / 2];
+  auto near_both = [&](const glm::dvec3& p) {
+    return std::abs(glm::length(p - c1) - r1) < 3 * h && std::abs(glm::length(p - c2) - r2) < 3 * h;
+  };
+  // Within a factor of 3 of the triangles near both spheres; the smooth figure is no worse than
+  // the overall one (the small angles are at the crease).
+  std::size_t near = 0;
+  for (const auto& t : r.mesh.triangles) near += near_both(P[t[0]]) || near_both(P[t[1]]) || near_both(P[t[2]]);
+  EXPECT_GT(near, 0u);
+  EXPECT_LT(c.crease_triangles, 3 * near);
+  EXPECT_GT(3 * c.crease_triangles, near / 3);
+  EXPECT_GE(c.smooth_min_angle_p1, c.min_angle_p1);
+}
+
+}  // namespace
+}  // namespace ht
