@@ -196,6 +196,15 @@ std::string local_defect(const TriangleMesh& m, const LocalStats& local) {
   return why;
 }
 
+// The global polygonizer's result when it is not what every mesher must return: how many
+// topological defects, degenerate triangles and intersecting pairs its repair steps left.
+std::string global_defect(const TriangleMesh& m, const PolygonizeStats& stats) {
+  if (m.triangles.empty()) return "";
+  LocalStats local;
+  local.self_intersections = stats.crease_intersections;
+  return local_defect(m, local);
+}
+
 // Runs the jobs on a flow graph; each job reads the results of its deps only.
 class Runner {
  public:
@@ -370,7 +379,15 @@ std::shared_ptr<const TriangleMesh> Runner::global(NodeId n, const std::shared_p
   p.progress = {};
   if (report_progress && o_.progress) p.progress = [this](double f) { progress(std::min(f, 0.999)); };
   r.polygonized = true;
-  return std::make_shared<const TriangleMesh>(polygonize(g, n, tree_.threshold(), p, &r.polygonize));
+  // A grid that under-resolves the surface (features thinner than a cell) can leave folds the
+  // repair steps cannot undo; a finer grid resolves them. Each try is as deterministic as the first.
+  for (int attempt = 0;; ++attempt) {
+    auto mesh = std::make_shared<const TriangleMesh>(polygonize(g, n, tree_.threshold(), p, &r.polygonize));
+    const std::string why = global_defect(*mesh, r.polygonize);
+    if (why.empty() || attempt == kRefinements) return mesh;
+    r.refinements.push_back("precision " + std::to_string(p.precision) + ": " + why);
+    p.precision *= kRefineFactor;
+  }
 }
 
 std::shared_ptr<const TriangleMesh> Runner::trim(const Job& job, const std::shared_ptr<const Graph>& g, NodeReport& r) {

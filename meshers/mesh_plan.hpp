@@ -71,7 +71,14 @@ struct NodeReport {
   PolygonizeStats polygonize;      ///< its statistics
   LocalStats local;                ///< trim strategies
   std::size_t edges_split = 0;     ///< warped child: local remeshing
+  /// Global polygonizations redone at kRefineFactor times the precision, each with what the
+  /// coarser one left (its grid under-resolved the surface): "precision P: N degenerate triangles".
+  std::vector<std::string> refinements;
 };
+
+/// At most this many finer tries of a global polygonization whose repair left defects.
+inline constexpr int kRefinements = 3;
+inline constexpr double kRefineFactor = 0.9;
 
 struct MeshOptions {
   double precision = 0.0;  ///< target edge length, world units; > 0

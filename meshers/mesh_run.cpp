@@ -39,6 +39,7 @@ nlohmann::json node_json(const Graph& g, const NodeReport& e) {
                       {"seconds", e.seconds}};
   if (e.rho >= 0) n["rho"] = e.rho;
   if (!e.fallback_cause.empty()) n["fallback_cause"] = e.fallback_cause;
+  if (!e.refinements.empty()) n["refinements"] = e.refinements;
   if (e.polygonized) {
     n["bricks"] = {{"total", e.polygonize.bricks_total}, {"active", e.polygonize.bricks_active},
                    {"points_evaluated", e.polygonize.points_evaluated}};

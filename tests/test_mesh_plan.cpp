@@ -5,8 +5,10 @@
 #include "meshers/mesh_plan.hpp"
 #include "nodes/mesh_leaf.hpp"
 #include "runtime/builder.hpp"
+#include "runtime/optimize.hpp"
 #include "runtime/tape_eval.hpp"
 #include "tests/support/random_tree.hpp"
+#include "tools/scenes.hpp"
 
 #include <glm/geometric.hpp>
 #include <glm/gtc/matrix_transform.hpp>
@@ -228,5 +230,22 @@ TEST(MeshPlan, MemoryBudgetCountsAndRefuses) {
     b.take(2048.0 * 1024 * 1024, "the thing");
   } catch (const MemoryBudgetError& e) {
     EXPECT_EQ(std::string(e.what()).rfind("the thing needs 2.00 GiB, over the memory budget of 1000 bytes", 0), 0u) << e.what();
+  }
+}
+
+TEST(MeshPlan, CoarseGlobalGridsAreRefinedUntilTheMeshIsClean) {
+  // 900 primitives, many thinner than a cell at these precisions (the scene's default is 0.3006):
+  // the first grid's repair steps may leave folds; whatever the tries, the mesh returned is
+  // watertight and free of self-intersections, and each refinement says what it fixed.
+  Builder b(kT);
+  const Tree t = optimize(b.build(scenes::scatter(b)));
+  for (double h : {0.3006, 0.32}) {
+    const MeshResult r = mesh_tree(t, at(h));
+    const MeshChecks c = check_mesh(*r.mesh);
+    EXPECT_TRUE(c.watertight()) << h;
+    EXPECT_EQ(c.self_intersecting_pairs, 0u) << h;
+    ASSERT_EQ(r.nodes.size(), 1u);
+    EXPECT_LE(r.nodes[0].refinements.size(), std::size_t(kRefinements));
+    for (const std::string& why : r.nodes[0].refinements) EXPECT_NE(why.find("precision "), std::string::npos) << why;
   }
 }

@@ -269,6 +269,10 @@ int cmd_mesh(const MeshArgs& a) {
               a.out.c_str(), checks.triangles, checks.vertices, run.options.precision, run.mesh_seconds,
               ht::root_strategy(run, tree.root()).c_str(), checks.watertight() ? "closed manifold" : "NOT watertight",
               checks.genus);
+  for (const ht::NodeReport& e : run.result.nodes)
+    for (const std::string& why : e.refinements)
+      std::fprintf(stderr, "hybridtree: note: node %u: the grid at %s; polygonized again with cells %g%% smaller\n", e.node,
+                   why.c_str(), 100.0 * (1.0 - ht::kRefineFactor));
   if (!a.stats_json.empty())
     ht::cli::write_file_atomically(a.stats_json, ht::mesh_stats_json(tree, run, a.scene, load_s, a.out, write_s),
                                    "stats file");
