@@ -2,14 +2,21 @@
 
 #include "meshers/mesh_plan.hpp"
 #include "meshers/polygonize.hpp"
+#include "meshers/self_intersections.hpp"
+#include "meshers/unfold.hpp"
+#include "meshers/warp_mesh.hpp"
+#include "runtime/tape_eval.hpp"
 #include "nodes/mesh_leaf.hpp"
 #include "nodes/warps.hpp"
 #include "runtime/graph_writer.hpp"
 
+#include <limits>
 #include <vector>
 
 namespace ht {
 namespace {
+
+constexpr int kUnfoldRounds = 8;
 
 void collect(const Graph& g, NodeId n, std::vector<std::uint8_t>& seen) {
   if (seen[n]) return;
@@ -27,12 +34,30 @@ bool needs_ffd_preparation(const Graph& g, NodeId root) {
   return false;
 }
 
-std::shared_ptr<const MeshLeaf> deform_child_mesh(const Graph& g, NodeId n, const TriangleMesh& child_mesh) {
+std::shared_ptr<const MeshLeaf> deform_child_mesh(const std::shared_ptr<const Graph>& graph, NodeId n,
+                                                  const TriangleMesh& child_mesh, double max_edge, double threshold) {
+  const Graph& g = *graph;
   if (child_mesh.triangles.empty())
     throw PolygonizeError("ffd node " + g.label(n) + ": its child's surface is empty, there is nothing to deform");
-  TriangleMesh mesh = child_mesh;
-  const double* params = g.params_of(n).data();
-  for (glm::dvec3& v : mesh.positions) v = warp_forward(NodeKind::Ffd, params, v);
+  TriangleMesh mesh;
+  if (max_edge > 0) {
+    // Edges the lattice stretches are split (new vertices on the child's surface) before they
+    // are moved, so a strongly bent region is not spanned by long flat triangles that cut into
+    // their neighbours.
+    const TapeEvaluator child_field(std::make_shared<const Tape>(compile_tape(graph, g.children_of(n)[0], threshold)));
+    mesh = warp_mesh(child_mesh, forward_map(g, n), &child_field, threshold, max_edge);
+  } else {
+    mesh = child_mesh;
+    const double* params = g.params_of(n).data();
+    for (glm::dvec3& v : mesh.positions) v = warp_forward(NodeKind::Ffd, params, v);
+  }
+  // A fold the child's mesh all but made (two sheets of a thin band a hair apart) can close
+  // under the lattice; its intersecting triangles give up edges (meshers/unfold.hpp).
+  auto pairs = find_self_intersections(mesh, std::numeric_limits<std::size_t>::max()).examples;
+  if (!pairs.empty()) {
+    std::vector<std::uint8_t> no_crease;
+    unfold(mesh, no_crease, pairs, kUnfoldRounds);
+  }
   try {
     return MeshLeaf::from_triangles(std::move(mesh.positions), std::move(mesh.triangles),
                                     "deformed mesh of ffd node " + g.label(n));

@@ -18,9 +18,13 @@ namespace ht {
 bool needs_ffd_preparation(const Graph& graph, NodeId root);
 
 /// The mesh leaf of ffd node `ffd`: `child_mesh` (the child's mesh, in the child's space) moved
-/// by the lattice. Throws PolygonizeError when the child's mesh is empty or the deformed mesh is
-/// not a valid closed mesh.
-std::shared_ptr<const MeshLeaf> deform_child_mesh(const Graph& graph, NodeId ffd, const TriangleMesh& child_mesh);
+/// by the lattice. With max_edge > 0, edges the lattice stretches past max_edge are split first,
+/// their new vertices put on the child's surface {f = threshold} (meshers/warp_mesh.hpp).
+/// Throws PolygonizeError when the child's mesh is empty or the deformed mesh is not a valid
+/// closed mesh.
+std::shared_ptr<const MeshLeaf> deform_child_mesh(const std::shared_ptr<const Graph>& graph, NodeId ffd,
+                                                  const TriangleMesh& child_mesh, double max_edge = 0.0,
+                                                  double threshold = 0.0);
 
 /// A copy of `graph` in which ffd node `ffd` carries `leaf` (node ids unchanged, supports
 /// recomputed).

@@ -357,7 +357,7 @@ std::shared_ptr<const TriangleMesh> Runner::execute(const Job& job, NodeReport& 
       return mesh;
     }
     case JobStrategy::DeformedChild: {
-      auto leaf = deform_child_mesh(*g, n, input(job, 0));
+      auto leaf = deform_child_mesh(g, n, input(job, 0), 1.5 * h, T);
       {
         std::lock_guard lock(graph_mutex_);
         graph_ = attach_ffd_mesh(*graph_, n, leaf);
