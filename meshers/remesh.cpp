@@ -26,16 +26,7 @@ class Remesher {
            const TapeEvaluator& field, double T, double target)
       : field_(field), T_(T), L_(target) {
     ok_ = to_openmesh(sub, locked, origin, m_, locked_, origin_);
-    // Creases stay: both ends of an edge whose triangles meet at more than 30 degrees are locked.
-    if (ok_)
-      for (const auto e : m_.edges()) {
-        if (m_.is_boundary(e)) continue;
-        const auto h = m_.halfedge_handle(e, 0);
-        if (glm::dot(normal(m_.face_handle(h)), normal(m_.face_handle(m_.opposite_halfedge_handle(h)))) < kCreaseCos) {
-          m_.property(locked_, m_.from_vertex_handle(h)) = true;
-          m_.property(locked_, m_.to_vertex_handle(h)) = true;
-        }
-      }
+    if (ok_) lock_creases();
   }
   bool ok() const { return ok_; }
 
@@ -52,6 +43,44 @@ class Remesher {
   void result(TriangleMesh& out, std::vector<std::uint32_t>& origin) { from_openmesh(m_, origin_, out, origin); }
 
  private:
+  // Creases stay: both ends of an edge whose triangles meet at more than 30 degrees are locked,
+  // when the field's gradient at those ends turns by more than 30 degrees too. A sliver's normal
+  // says little of the surface (its corners lie on it, its plane need not), so a sliver beside a
+  // smooth stretch is not a crease, and the remeshing may take it away.
+  void lock_creases() {
+    struct Candidate {
+      TriMesh::VertexHandle a, b, c, d;  // the edge's ends, then its far corners
+    };
+    std::vector<Candidate> candidates;
+    for (const auto e : m_.edges()) {
+      if (m_.is_boundary(e)) continue;
+      const auto h = m_.halfedge_handle(e, 0);
+      if (glm::dot(normal(m_.face_handle(h)), normal(m_.face_handle(m_.opposite_halfedge_handle(h)))) >= kCreaseCos)
+        continue;
+      candidates.push_back({m_.from_vertex_handle(h), m_.to_vertex_handle(h),
+                            m_.to_vertex_handle(m_.next_halfedge_handle(h)),
+                            m_.to_vertex_handle(m_.next_halfedge_handle(m_.opposite_halfedge_handle(h)))});
+    }
+    if (candidates.empty()) return;
+    std::vector<glm::dvec3> at, grad;
+    std::vector<double> value;
+    for (const Candidate& k : candidates)
+      for (const auto v : {k.a, k.b, k.c, k.d}) at.push_back(g(m_.point(v)));
+    grad.resize(at.size());
+    value.resize(at.size());
+    field_.gradient(at, value, grad);
+    auto turns = [&](std::size_t i, std::size_t j) {
+      const double li = glm::length(grad[i]), lj = glm::length(grad[j]);
+      return !(li > 0 && lj > 0) || glm::dot(grad[i], grad[j]) < kCreaseCos * li * lj;
+    };
+    for (std::size_t i = 0; i < candidates.size(); ++i) {
+      // The far corners too: a crease may run along the edge itself, both ends on it.
+      if (!turns(4 * i, 4 * i + 1) && !turns(4 * i + 2, 4 * i + 3)) continue;
+      m_.property(locked_, candidates[i].a) = true;
+      m_.property(locked_, candidates[i].b) = true;
+    }
+  }
+
   bool locked(TriMesh::VertexHandle v) const { return m_.property(locked_, v); }
   bool frozen(TriMesh::EdgeHandle e) const {
     const auto h = m_.halfedge_handle(e, 0);
