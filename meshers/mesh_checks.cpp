@@ -5,6 +5,8 @@
 #include "meshers/self_intersections.hpp"
 #include "meshers/surface_field.hpp"
 #include "nodes/mesh_leaf.hpp"
+#include "nodes/warps.hpp"
+#include "runtime/graph.hpp"
 #include "runtime/tape_eval.hpp"
 
 #include <glm/geometric.hpp>
@@ -283,14 +285,34 @@ void measure_surface_error(const TriangleMesh& mesh, SurfaceField& field, MeshCh
   surface_error(mesh, [&](const auto& p, auto& f, auto& g) { field.gradient(p, f, g); }, field.threshold(), c, kept);
 }
 
-std::vector<std::uint8_t> kept_leaf_triangles(const TriangleMesh& mesh,
-                                              std::span<const std::shared_ptr<const MeshLeaf>> leaves) {
+namespace {
+
+// The corners of every mesh leaf (and prepared ffd) under `n`, moved by the affine nodes above it
+// up to the root, the way the warped-child jobs move them: innermost first, with the same map.
+// Below a twist, taper or bend the triangles change shape, so nothing there counts.
+void leaf_corners(const Graph& g, NodeId n, std::vector<NodeId>& affines, std::vector<glm::dvec3>& out,
+                  std::size_t& budget) {
+  if (budget == 0) return;
+  --budget;
+  if (g.mesh[n] != kNone && g.meshes[g.mesh[n]]) {
+    for (glm::dvec3 p : g.meshes[g.mesh[n]]->positions()) {
+      for (auto a = affines.rbegin(); a != affines.rend(); ++a) p = warp_forward(NodeKind::Affine, g.params_of(*a).data(), p);
+      out.push_back(p);
+    }
+    return;
+  }
+  if (kind_family(g.kind[n]) == Family::Warp && g.kind[n] != NodeKind::Affine) return;
+  if (g.kind[n] == NodeKind::Affine) affines.push_back(n);
+  for (NodeId c : g.children_of(n)) leaf_corners(g, c, affines, out, budget);
+  if (g.kind[n] == NodeKind::Affine) affines.pop_back();
+}
+
+}  // namespace
+
+std::vector<std::uint8_t> kept_leaf_triangles(const TriangleMesh& mesh, std::vector<glm::dvec3> corners) {
   auto less = [](const glm::dvec3& a, const glm::dvec3& b) {
     return a.x != b.x ? a.x < b.x : a.y != b.y ? a.y < b.y : a.z < b.z;
   };
-  std::vector<glm::dvec3> corners;
-  for (const auto& leaf : leaves)
-    if (leaf) corners.insert(corners.end(), leaf->positions().begin(), leaf->positions().end());
   std::sort(corners.begin(), corners.end(), less);
   std::vector<std::uint8_t> on_leaf(mesh.positions.size(), 0), out(mesh.triangles.size(), 0);
   if (corners.empty()) return out;
@@ -301,6 +323,14 @@ std::vector<std::uint8_t> kept_leaf_triangles(const TriangleMesh& mesh,
     out[t] = on_leaf[tri[0]] & on_leaf[tri[1]] & on_leaf[tri[2]];
   }
   return out;
+}
+
+std::vector<std::uint8_t> kept_leaf_triangles(const TriangleMesh& mesh, const Graph& graph, NodeId root) {
+  std::vector<glm::dvec3> corners;
+  std::vector<NodeId> affines;
+  std::size_t budget = 4096;  // node visits: a tree that shares subtrees is walked once a path
+  leaf_corners(graph, root, affines, corners, budget);
+  return kept_leaf_triangles(mesh, std::move(corners));
 }
 
 }  // namespace ht

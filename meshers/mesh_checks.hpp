@@ -6,17 +6,16 @@
 #pragma once
 
 #include "meshers/triangle_mesh.hpp"
+#include "runtime/graph.hpp"
 
 #include <array>
 #include <cstddef>
 #include <cstdint>
-#include <memory>
 #include <span>
 #include <vector>
 
 namespace ht {
 
-class MeshLeaf;
 class SurfaceField;
 class TapeEvaluator;
 
@@ -81,9 +80,11 @@ void measure_surface_error(const TriangleMesh& mesh, const TapeEvaluator& tape, 
 void measure_surface_error(const TriangleMesh& mesh, SurfaceField& field, MeshChecks& checks,
                            std::span<const std::uint8_t> kept = {});
 
-/// One flag per triangle of `mesh`: its three corners are vertices of one of `leaves`' meshes,
-/// bit for bit (a triangle kept from the user's mesh). Linear in the meshes' sizes.
-std::vector<std::uint8_t> kept_leaf_triangles(const TriangleMesh& mesh,
-                                              std::span<const std::shared_ptr<const MeshLeaf>> leaves);
+/// One flag per triangle of `mesh`: its three corners are among `corners`, bit for bit.
+std::vector<std::uint8_t> kept_leaf_triangles(const TriangleMesh& mesh, std::vector<glm::dvec3> corners);
+/// The same with the corners of the mesh leaves (and prepared ffds) under `root`, moved by the
+/// affine nodes above each, as the mesh plan moves them: the triangles kept from the user's
+/// meshes. O((V + C) log C) for C corners; a leaf under a twist, taper or bend keeps none.
+std::vector<std::uint8_t> kept_leaf_triangles(const TriangleMesh& mesh, const Graph& graph, NodeId root);
 
 }  // namespace ht

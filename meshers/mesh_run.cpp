@@ -160,7 +160,7 @@ MeshRun run_mesh(const Tree& tree, const MeshRunOptions& o) {
     // would pay for every primitive at each of the vertices and face centres.
     SurfaceField field(run.result.tree->graph_ptr(), run.result.tree->root(), tree.threshold(),
                        mesh.positions.front(), 8.0 * options.precision);
-    const auto kept = kept_leaf_triangles(mesh, run.result.tree->graph().meshes);
+    const auto kept = kept_leaf_triangles(mesh, run.result.tree->graph(), run.result.tree->root());
     measure_surface_error(mesh, field, run.checks, kept);
   }
   run.check_seconds = std::chrono::duration<double>(clock::now() - t2).count();

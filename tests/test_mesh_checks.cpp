@@ -1,6 +1,7 @@
 // The angle census of the mesh checks (meshers/mesh_checks.hpp): which triangles are a mesh
 // leaf's own, which lie at a crease, and that the smooth ones' figures are the ones left.
 #include "meshers/mesh_checks.hpp"
+#include "meshers/mesh_plan.hpp"
 #include "meshers/mesh_run.hpp"
 #include "nodes/mesh_leaf.hpp"
 #include "runtime/builder.hpp"
@@ -8,6 +9,7 @@
 #include "tests/support/test_support.hpp"
 
 #include <glm/geometric.hpp>
+#include <glm/gtc/matrix_transform.hpp>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -23,7 +25,7 @@ constexpr double kT = 0.5;
 TEST(MeshChecks, KeptTrianglesAreTheLeafsOwnBitForBit) {
   const auto leaf = MeshLeaf::load(test::cgal_mesh("eight.off"));
   TriangleMesh mesh = *leaf->surface();
-  const std::vector<std::shared_ptr<const MeshLeaf>> leaves{leaf};
+  const std::vector<glm::dvec3> leaves = leaf->positions();
   auto count = [](const std::vector<std::uint8_t>& f) { return std::size_t(std::count(f.begin(), f.end(), 1)); };
   EXPECT_EQ(count(kept_leaf_triangles(mesh, leaves)), mesh.triangles.size());
   // One vertex moved by one ulp: the triangles around it are no longer the leaf's.
@@ -32,7 +34,26 @@ TEST(MeshChecks, KeptTrianglesAreTheLeafsOwnBitForBit) {
   for (const auto& t : mesh.triangles) fan += (t[0] == v || t[1] == v || t[2] == v);
   mesh.positions[v].x = std::nextafter(mesh.positions[v].x, 1e300);
   EXPECT_EQ(count(kept_leaf_triangles(mesh, leaves)), mesh.triangles.size() - fan);
-  EXPECT_EQ(count(kept_leaf_triangles(mesh, {})), 0u);
+  EXPECT_EQ(count(kept_leaf_triangles(mesh, std::vector<glm::dvec3>{})), 0u);
+}
+
+TEST(MeshChecks, ALeafMovedByAffinesKeepsItsTriangles) {
+  // Rotated, then moved: the warped-child jobs move every vertex, and the census
+  // moves the leaf's corners the same way, so all its triangles are still its own. Under a twist
+  // they change shape and count as made.
+  const auto leaf = MeshLeaf::load(test::cgal_mesh("eight.off"));
+  Builder b(kT);
+  const glm::dmat4 turn = glm::rotate(glm::dmat4(1.0), 0.7, glm::dvec3(0.3, 1.0, 0.2));
+  const glm::dmat4 place = glm::translate(glm::dmat4(1.0), glm::dvec3(1.5, -2, 0.25));
+  const NodeId moved = b.affine(b.affine(b.mesh(leaf, {0.05}), turn), place);
+  const Tree t = b.build(moved);
+  const MeshResult r = mesh_tree(t, test::mesh_options(0.05));
+  auto count = [](const std::vector<std::uint8_t>& f) { return std::size_t(std::count(f.begin(), f.end(), 1)); };
+  EXPECT_EQ(count(kept_leaf_triangles(*r.mesh, r.tree->graph(), r.tree->root())), leaf->triangles().size());
+  Builder b2(kT);
+  const Tree twisted = b2.build(b2.twist(b2.mesh(leaf, {0.05}), Axis::Y, {0, 0, 0}, 1.0));
+  const MeshResult r2 = mesh_tree(twisted, test::mesh_options(0.05));
+  EXPECT_EQ(count(kept_leaf_triangles(*r2.mesh, r2.tree->graph(), r2.tree->root())), 0u);
 }
 
 TEST(MeshChecks, LeafBlendedWithABallKeepsItsFarTriangles) {
