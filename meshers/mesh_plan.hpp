@@ -37,6 +37,8 @@
 
 namespace ht {
 
+class NodeCache;
+
 /// The strategy asked for: each node's own (auto), polygonize everything at the root (global),
 /// or the local strategy wherever one exists (local).
 enum class MeshStrategy : std::uint8_t { Auto, Global, Local };
@@ -71,6 +73,7 @@ struct NodeReport {
   PolygonizeStats polygonize;      ///< its statistics
   LocalStats local;                ///< trim strategies
   std::size_t edges_split = 0;     ///< warped child: local remeshing
+  bool reused = false;             ///< taken from MeshOptions::cache; the job did not run
 };
 
 struct MeshOptions {
@@ -90,6 +93,11 @@ struct MeshOptions {
   const std::atomic<bool>* cancel = nullptr;
   /// Remesh what the local strategies make (blend patches and bands, meshers/remesh.hpp).
   bool remesh_seams = true;
+  /// Node results kept across runs (meshers/node_cache.hpp; not owned, may be shared by runs on
+  /// several threads). A job whose key is cached does not run; the mesh is the same, byte for
+  /// byte, as without the cache. Jobs that read an ffd's field, and runs with a brick_filter,
+  /// are not cached.
+  NodeCache* cache = nullptr;
 };
 
 struct MeshResult {
