@@ -2,15 +2,18 @@
 
 #include "meshers/ffd.hpp"
 #include "meshers/mesh_checks.hpp"
+#include "meshers/node_cache.hpp"
 #include "meshers/self_intersections.hpp"
 #include "meshers/sweep.hpp"
 #include "meshers/warp_mesh.hpp"
 #include "nodes/mesh_leaf.hpp"
+#include "runtime/subtree_hash.hpp"
 #include "runtime/tape.hpp"
 #include "runtime/tape_eval.hpp"
 
 #include <tbb/flow_graph.h>
 
+#include <bit>
 #include <chrono>
 #include <cmath>
 #include <exception>
@@ -213,6 +216,7 @@ class Runner {
         budget_(o.polygonize.budget ? *o.polygonize.budget : owned_budget_), graph_(tree.graph_ptr()),
         jobs_(std::move(jobs)), meshes_(jobs_.size()), reports_(jobs_.size()), errors_(jobs_.size()),
         leaves_(jobs_.size()) {
+    if (o_.cache && !o_.polygonize.brick_filter) compute_keys();
     // The mesh leaves are held for the whole run.
     for (const auto& leaf : graph_->meshes)
       if (leaf)
@@ -234,6 +238,9 @@ class Runner {
 
  private:
   void run(std::uint32_t j);
+  void compute_keys();
+  std::uint64_t key(std::uint32_t j, const SubtreeHashes& h, std::uint64_t options);
+  bool reuse(std::uint32_t j, NodeReport& r);
   std::shared_ptr<const TriangleMesh> execute(const Job& job, NodeReport& r);
   std::shared_ptr<const TriangleMesh> global(NodeId n, const std::shared_ptr<const Graph>& g, NodeReport& r, bool report_progress);
   std::shared_ptr<const TriangleMesh> trim(const Job& job, const std::shared_ptr<const Graph>& g, NodeReport& r);
@@ -256,6 +263,9 @@ class Runner {
   std::vector<NodeReport> reports_;
   std::vector<std::exception_ptr> errors_;
   std::vector<std::shared_ptr<const MeshLeaf>> leaves_;  // ffd jobs: their deformed meshes
+  // With a cache: each job's key, and whether it may be cached (0: not computed, 1: yes, 2: no).
+  std::vector<std::uint64_t> keys_;
+  std::vector<std::uint8_t> cacheable_;
   std::atomic<std::size_t> done_{0};
   double reported_ = 0.0;
 };
@@ -287,7 +297,10 @@ void Runner::run(std::uint32_t j) {
   r.reason = job.reason;
   r.rho = job.rho;
   try {
-    meshes_[j] = execute(job, r);
+    if (!reuse(j, r)) {
+      meshes_[j] = execute(job, r);
+      if (!cacheable_.empty() && cacheable_[j] == 1) o_.cache->insert(keys_[j], CachedJob{meshes_[j], r});
+    }
     r.triangles = meshes_[j]->triangles.size();
     // A job's mesh is held until the run ends; a shared leaf's is the leaf's own, counted above.
     if (job.strategy != JobStrategy::SharedLeaf)
@@ -303,6 +316,46 @@ void Runner::run(std::uint32_t j) {
   } catch (...) {  // a callback that throws ends the run as this job's error, in plan order
     if (!errors_[j]) errors_[j] = std::current_exception();
   }
+}
+
+// A job's key: its subtree's hash (as a root of its own), what it does and why, the keys of the
+// jobs it reads, and the options. Jobs that read an ffd's field (attached as the run goes) and
+// shared leaves (nothing to save) are not cached, nor is anything that reads them.
+std::uint64_t Runner::key(std::uint32_t j, const SubtreeHashes& h, std::uint64_t options) {
+  if (cacheable_[j]) return keys_[j];
+  const Job& job = jobs_[j];
+  bool ok = job.strategy != JobStrategy::SharedLeaf && job.strategy != JobStrategy::DeformedChild &&
+            !needs_ffd_preparation(*graph_, job.node);
+  std::uint64_t k = hash_mix(hash_mix(hash_mix(options, h.alone[job.node]), std::uint64_t(job.strategy)),
+                             std::uint64_t(job.reason));
+  k = hash_mix(k, std::bit_cast<std::uint64_t>(job.rho));
+  for (std::uint32_t d : job.deps) {
+    k = hash_mix(k, key(d, h, options));
+    ok = ok && (cacheable_[d] == 1 || jobs_[d].strategy == JobStrategy::SharedLeaf);
+  }
+  keys_[j] = k;
+  cacheable_[j] = ok ? 1 : 2;
+  return k;
+}
+
+void Runner::compute_keys() {
+  const SubtreeHashes h = subtree_hashes(*graph_, tree_.threshold());
+  const std::uint64_t options = mesh_options_hash(o_);
+  keys_.assign(jobs_.size(), 0);
+  cacheable_.assign(jobs_.size(), 0);
+  for (std::uint32_t j = 0; j < jobs_.size(); ++j) key(j, h, options);
+}
+
+// Takes job j's result from the cache when it is there.
+bool Runner::reuse(std::uint32_t j, NodeReport& r) {
+  if (cacheable_.empty() || cacheable_[j] != 1) return false;
+  std::optional<CachedJob> hit = o_.cache->find(keys_[j]);
+  if (!hit) return false;
+  meshes_[j] = std::move(hit->mesh);
+  r = std::move(hit->report);
+  r.node = jobs_[j].node;
+  r.reused = true;
+  return true;
 }
 
 void Runner::run_all() {

@@ -37,6 +37,8 @@
 
 namespace ht {
 
+class NodeCache;
+
 /// The strategy asked for: each node's own (auto), polygonize everything at the root (global),
 /// or the local strategy wherever one exists (local).
 enum class MeshStrategy : std::uint8_t { Auto, Global, Local };
@@ -74,6 +76,7 @@ struct NodeReport {
   /// Global polygonizations redone at kRefineFactor times the precision, each with what the
   /// coarser one left (its grid under-resolved the surface): "precision P: N degenerate triangles".
   std::vector<std::string> refinements;
+  bool reused = false;             ///< taken from MeshOptions::cache; the job did not run
 };
 
 /// At most this many finer tries of a global polygonization whose repair left defects.
@@ -97,6 +100,11 @@ struct MeshOptions {
   const std::atomic<bool>* cancel = nullptr;
   /// Remesh what the local strategies make (blend patches and bands, meshers/remesh.hpp).
   bool remesh_seams = true;
+  /// Node results kept across runs (meshers/node_cache.hpp; not owned, may be shared by runs on
+  /// several threads). A job whose key is cached does not run; the mesh is the same, byte for
+  /// byte, as without the cache. Jobs that read an ffd's field, and runs with a brick_filter,
+  /// are not cached.
+  NodeCache* cache = nullptr;
 };
 
 struct MeshResult {

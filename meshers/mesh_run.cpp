@@ -38,6 +38,7 @@ nlohmann::json node_json(const Graph& g, const NodeReport& e) {
                       {"triangles", e.triangles},
                       {"seconds", e.seconds}};
   if (e.rho >= 0) n["rho"] = e.rho;
+  if (e.reused) n["reused"] = true;
   if (!e.fallback_cause.empty()) n["fallback_cause"] = e.fallback_cause;
   if (!e.refinements.empty()) n["refinements"] = e.refinements;
   if (e.polygonized) {
@@ -100,6 +101,14 @@ PolygonizeStats total_polygonize(const MeshResult& r) {
   return s;
 }
 
+// With a node cache: jobs reused (hits) and run (misses), and the reused nodes' labels.
+nlohmann::json cache_json(const Graph& g, const MeshResult& r) {
+  nlohmann::json reused = nlohmann::json::array();
+  for (const NodeReport& e : r.nodes)
+    if (e.reused) reused.push_back(g.label(e.node));
+  return {{"hits", reused.size()}, {"misses", r.nodes.size() - reused.size()}, {"reused_nodes", reused}};
+}
+
 nlohmann::json checks_json(const MeshChecks& c) {
   return {{"closed", c.closed()},
           {"manifold", c.manifold()},
@@ -147,6 +156,7 @@ MeshRun run_mesh(const Tree& tree, const MeshRunOptions& o) {
   options.blend_overlap = tree.mesher_settings().blend_overlap;
   options.progress = o.progress;
   options.cancel = o.cancel;
+  options.cache = o.cache;
   run.strategy = o.strategy.empty() ? scene_strategy(tree) : o.strategy;
   options.strategy = strategy_of(run.strategy);
   const auto t1 = clock::now();
@@ -184,6 +194,7 @@ std::string mesh_stats_json(const Tree& tree, const MeshRun& run, const std::str
   nlohmann::json nodes = nlohmann::json::array();
   for (const NodeReport& e : run.result.nodes) nodes.push_back(node_json(tree.graph(), e));
   j["nodes"] = nodes;
+  if (run.options.cache) j["cache"] = cache_json(tree.graph(), run.result);
   j["triangles"] = c.triangles;
   j["vertices"] = c.vertices;
   j["checks"] = checks_json(c);

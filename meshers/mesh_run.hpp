@@ -27,6 +27,7 @@ struct MeshRunOptions {
   bool quality = true;
   std::function<void(double)> progress;     ///< as MeshOptions::progress
   const std::atomic<bool>* cancel = nullptr;  ///< as MeshOptions::cancel
+  NodeCache* cache = nullptr;                 ///< as MeshOptions::cache (not owned)
 };
 
 struct MeshRun {
@@ -47,7 +48,8 @@ std::string root_strategy(const MeshRun& run, NodeId root);
 
 /// The statistics as JSON text (2-space indent, ending in a newline), the document `hybridtree
 /// mesh --stats-json` writes: per node the strategy, why, triangles and seconds; the checks; the
-/// polygonizer's bricks, crease, snap and quality figures; seconds per stage. `output` and
+/// polygonizer's bricks, crease, snap and quality figures; seconds per stage; with a node cache,
+/// "cache": {"hits", "misses", "reused_nodes": [labels]} (jobs reused, jobs run). `output` and
 /// `write_seconds` are left out when `output` is empty (nothing was written yet).
 std::string mesh_stats_json(const Tree& tree, const MeshRun& run, const std::string& scene, double load_seconds,
                             const std::string& output = {}, double write_seconds = 0.0);

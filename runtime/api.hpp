@@ -158,6 +158,10 @@ struct MeshStats {
   long genus = 0;
   std::string strategy;         ///< "auto", "global" or "local": what was asked
   std::string root_strategy;    ///< the root's job and why: "trim blend (low overlap)"
+  /// Session::mesh only: the jobs taken from the session's cache (they did not run), by label
+  /// ("name", else "type #id"), and the jobs that ran.
+  std::vector<std::string> reused_nodes;
+  std::size_t cache_misses = 0;
   /// Every figure, as the JSON document `hybridtree mesh --stats-json` writes (without the
   /// output file and the write time): per node strategy, reason, triangles and seconds; the
   /// checks (closed, manifold, genus, area, volume, angles, surface error); seconds per stage.
@@ -219,8 +223,41 @@ class HYBRIDTREE_API Tree {
 
  private:
   friend class Builder;
+  friend class Session;
   explicit Tree(std::shared_ptr<const Impl> impl);
   std::shared_ptr<const Impl> impl_;
+};
+
+/// A meshing session: keeps node results (each job's mesh, keyed by a content hash of its
+/// subtree, the precision and every option that changes output) across calls, so that meshing
+/// an edited tree runs only the jobs whose subtree changed. The mesh is the same, byte for byte,
+/// as Tree::mesh of the same tree. Edit by building or loading the new tree (Tree::from_json of
+/// edited JSON, a Builder): unchanged subtrees are found by content, wherever they sit.
+///
+///   hybridtree::Session session(512u << 20);                   // cache bound, bytes
+///   hybridtree::Mesh first = session.mesh(tree, options);
+///   hybridtree::Mesh again = session.mesh(edited_tree, options);  // again.stats.reused_nodes
+///
+/// Bounded: least-recently-used entries go first. Thread-safe: calls from several threads may
+/// share one session. Not cached: jobs that read an ffd's field.
+class HYBRIDTREE_API Session {
+ public:
+  explicit Session(std::size_t cache_bytes = std::size_t(1) << 30);
+  /// As tree.mesh(options), reusing and filling the cache; stats.reused_nodes and
+  /// stats.cache_misses say what was reused, and stats.json has "cache".
+  Mesh mesh(const Tree& tree, const MeshOptions& options = {});
+  /// Bytes the cache holds now, and its entries.
+  std::size_t cache_bytes() const;
+  std::size_t cache_entries() const;
+  void clear();
+
+  Session(const Session&) = delete;
+  Session& operator=(const Session&) = delete;
+  ~Session();
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
 };
 
 /// Writes a mesh: .ply (binary), .obj, .off (ASCII, 17 digits) or .stl (binary), by extension,

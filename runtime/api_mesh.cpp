@@ -4,6 +4,7 @@
 
 #include "meshers/mesh_io.hpp"
 #include "meshers/mesh_run.hpp"
+#include "meshers/node_cache.hpp"
 #include "runtime/api_impl.hpp"
 
 #include <tbb/task_arena.h>
@@ -52,20 +53,42 @@ Mesh to_mesh(const Tree::Impl& impl, const ht::MeshRun& run) {
   s.strategy = run.strategy;
   s.root_strategy = ht::root_strategy(run, impl.loaded.root());
   s.json = ht::mesh_stats_json(impl.loaded, run, impl.source, impl.load_seconds);
+  if (run.options.cache)
+    for (const ht::NodeReport& r : run.result.nodes) {
+      if (r.reused) s.reused_nodes.push_back(impl.loaded.graph().label(r.node));
+      else ++s.cache_misses;
+    }
   return out;
 }
 
-}  // namespace
-
-Mesh Tree::mesh(const MeshOptions& options) const {
-  const ht::MeshRunOptions o = run_options(options);
-  return guarded(impl_->source, [&] {
-    auto run = [&] { return to_mesh(*impl_, ht::run_mesh(impl_->loaded, o)); };
+// Tree::mesh and Session::mesh: the run, in a task arena of options.threads when asked.
+Mesh mesh_with(const Tree::Impl& impl, const MeshOptions& options, ht::NodeCache* cache) {
+  ht::MeshRunOptions o = run_options(options);
+  o.cache = cache;
+  return guarded(impl.source, [&] {
+    auto run = [&] { return to_mesh(impl, ht::run_mesh(impl.loaded, o)); };
     if (options.threads == 0) return run();
     tbb::task_arena arena(options.threads);
     return arena.execute(run);
   });
 }
+
+}  // namespace
+
+struct Session::Impl {
+  explicit Impl(std::size_t bytes) : cache(bytes) {}
+  ht::NodeCache cache;
+};
+
+Mesh Tree::mesh(const MeshOptions& options) const { return mesh_with(*impl_, options, nullptr); }
+
+Mesh Session::mesh(const Tree& tree, const MeshOptions& options) { return mesh_with(*tree.impl_, options, &impl_->cache); }
+
+Session::Session(std::size_t cache_bytes) : impl_(std::make_unique<Impl>(cache_bytes)) {}
+Session::~Session() = default;
+std::size_t Session::cache_bytes() const { return impl_->cache.stats().bytes; }
+std::size_t Session::cache_entries() const { return impl_->cache.stats().entries; }
+void Session::clear() { impl_->cache.clear(); }
 
 void write_mesh(std::span<const double> vertices, std::span<const std::uint32_t> triangles, const std::string& file) {
   if (!ht::supported_mesh_extension(file))

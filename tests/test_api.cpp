@@ -10,6 +10,7 @@
 #include <gtest/gtest.h>
 
 #include <atomic>
+#include <cstring>
 #include <random>
 #include <thread>
 #include <vector>
@@ -153,3 +154,30 @@ TEST(Api, ErrorsCarryTheFileAndThePath) {
 }
 
 }  // namespace
+
+TEST(Api, SessionReusesUnchangedJobsAndGivesTheSameMesh) {
+  auto scene = [](double radius) {
+    hybridtree::Builder b;
+    const auto left = b.segment({-1, 0, 0}, {0, 0, 0}, {0.5, 1.0});
+    const auto right = b.segment({0.6, 0, 0}, {1.6, 0, 0}, {radius, 1.0});
+    b.set_name(right, "right");
+    const std::vector<hybridtree::Node> both = {left, right};
+    return b.build(b.unite(both));
+  };
+  hybridtree::MeshOptions o;
+  o.precision = 0.05;
+  hybridtree::Session session(64u << 20);
+  const hybridtree::Mesh first = session.mesh(scene(0.5), o);
+  EXPECT_TRUE(first.stats.reused_nodes.empty());
+  EXPECT_GT(first.stats.cache_misses, 0u);
+  const hybridtree::Tree edited = scene(0.55);
+  const hybridtree::Mesh again = session.mesh(edited, o);
+  const hybridtree::Mesh scratch = edited.mesh(o);
+  ASSERT_FALSE(again.stats.reused_nodes.empty());
+  for (const std::string& n : again.stats.reused_nodes) EXPECT_NE(n, "right");
+  EXPECT_EQ(again.triangles, scratch.triangles);
+  ASSERT_EQ(again.vertices.size(), scratch.vertices.size());
+  EXPECT_EQ(std::memcmp(again.vertices.data(), scratch.vertices.data(), 8 * again.vertices.size()), 0);
+  EXPECT_NE(again.stats.json.find("\"cache\""), std::string::npos);
+  EXPECT_GT(session.cache_entries(), 0u);
+}

@@ -117,8 +117,9 @@ struct Progress {
   }
 };
 
-py::tuple mesh(const Tree& tree, double precision, const std::string& strategy, int threads,
-               double memory_budget_gib, bool sharp_features, bool quality, py::object progress) {
+// Tree.mesh (session null) and Session.mesh.
+py::tuple mesh_in(Session* session, const Tree& tree, double precision, const std::string& strategy, int threads,
+                  double memory_budget_gib, bool sharp_features, bool quality, py::object progress) {
   MeshOptions o;
   o.precision = precision;
   o.strategy = strategy_arg(strategy);
@@ -133,7 +134,7 @@ py::tuple mesh(const Tree& tree, double precision, const std::string& strategy, 
   Mesh m;
   try {
     py::gil_scoped_release unlocked;
-    m = tree.mesh(o);
+    m = session ? session->mesh(tree, o) : tree.mesh(o);
   } catch (const CancelledError&) {
     if (watch.stop) std::rethrow_exception(watch.stop);
     throw;
@@ -142,6 +143,19 @@ py::tuple mesh(const Tree& tree, double precision, const std::string& strategy, 
   py::dict stats = py::module_::import("json").attr("loads")(m.stats.json);
   stats["root_strategy"] = m.stats.root_strategy;
   return py::make_tuple(to_numpy(std::move(m.vertices), 3), to_numpy(std::move(m.triangles), 3), stats);
+}
+
+py::tuple mesh(const Tree& tree, double precision, const std::string& strategy, int threads,
+               double memory_budget_gib, bool sharp_features, bool quality, py::object progress) {
+  return mesh_in(nullptr, tree, precision, strategy, threads, memory_budget_gib, sharp_features, quality,
+                 std::move(progress));
+}
+
+py::tuple session_mesh(Session& session, const Tree& tree, double precision, const std::string& strategy,
+                       int threads, double memory_budget_gib, bool sharp_features, bool quality,
+                       py::object progress) {
+  return mesh_in(&session, tree, precision, strategy, threads, memory_budget_gib, sharp_features, quality,
+                 std::move(progress));
 }
 
 void write_arrays(const std::string& file, const py::handle& vertices, const py::handle& triangles) {
@@ -167,6 +181,20 @@ void bind_tree(py::module_& m) {
            "(vertices (V, 3) float64, triangles (T, 3) uint32, statistics dict) of the surface");
 }
 
+void bind_session(py::module_& m) {
+  py::class_<Session>(m, "Session",
+                      "Keeps node results across mesh calls (bounded, LRU): re-meshing an edited tree runs only "
+                      "the jobs whose subtree changed; the mesh is the same as Tree.mesh's. Thread-safe.")
+      .def(py::init<std::size_t>(), py::arg("cache_bytes") = std::size_t(1) << 30)
+      .def("mesh", &session_mesh, py::arg("tree"), py::kw_only(), py::arg("precision") = 0.0,
+           py::arg("strategy") = "scene", py::arg("threads") = 0, py::arg("memory_budget_gib") = 4.0,
+           py::arg("sharp_features") = true, py::arg("quality") = true, py::arg("progress") = py::none(),
+           "As Tree.mesh, with the session's cache; statistics[\"cache\"] has hits, misses, reused_nodes")
+      .def_property_readonly("cache_bytes", &Session::cache_bytes, "bytes the cache holds now")
+      .def_property_readonly("cache_entries", &Session::cache_entries, "entries the cache holds now")
+      .def("clear", &Session::clear, "Empty the cache");
+}
+
 }  // namespace
 
 void bind_builder(py::module_& m);  // tools/python/builder.cpp
@@ -176,6 +204,7 @@ PYBIND11_MODULE(hybridtree, m) {
   m.attr("__version__") = version();
   register_errors(m);
   bind_tree(m);
+  bind_session(m);
   m.def("load", &Tree::load, py::arg("file"), "Load a scene file (JSON); mesh paths are relative to its folder");
   m.def("loads", &Tree::from_json, py::arg("text"), py::arg("base_dir") = ".", py::arg("source") = "<text>",
         "Load a scene from JSON text");

@@ -1,0 +1,105 @@
+#include "meshers/node_cache.hpp"
+
+#include "runtime/subtree_hash.hpp"
+
+#include <bit>
+
+namespace ht {
+
+namespace {
+
+constexpr std::size_t kEntryOverhead = 256;  // report, list and map nodes, roughly
+
+std::uint64_t mix_double(std::uint64_t h, double v) { return hash_mix(h, std::bit_cast<std::uint64_t>(v)); }
+
+std::uint64_t mix_box(std::uint64_t h, const Aabb& b) {
+  for (int i = 0; i < 3; ++i) h = mix_double(mix_double(h, b.lo[i]), b.hi[i]);
+  return h;
+}
+
+}  // namespace
+
+// A new option field must be hashed above (or said not to change output): these trip when one
+// is added.
+static_assert(sizeof(FeatureOptions) == 40, "hash the new FeatureOptions field");
+static_assert(sizeof(QualityOptions) == 12, "hash the new QualityOptions field");
+
+std::uint64_t mesh_options_hash(const MeshOptions& o) {
+  std::uint64_t h = hash_mix(0x4d6573684f707473ull, 1);  // "MeshOpts", layout version 1
+  h = mix_double(h, o.precision);
+  h = hash_mix(h, static_cast<std::uint64_t>(o.strategy));
+  h = mix_double(h, o.blend_overlap);
+  h = hash_mix(h, o.remesh_seams);
+  const PolygonizeOptions& p = o.polygonize;
+  h = mix_double(h, p.precision);
+  h = hash_mix(h, static_cast<std::uint64_t>(p.refine_steps));
+  h = mix_double(h, p.refine_tolerance);
+  h = hash_mix(h, p.sharp_features);
+  h = hash_mix(h, p.snap);
+  const FeatureOptions& f = p.features;
+  for (double v : {f.sharp_angle_degrees, f.suspect_angle_degrees, f.max_error, f.snap}) h = mix_double(h, v);
+  h = hash_mix(h, static_cast<std::uint64_t>(f.refine_rounds));
+  h = hash_mix(h, p.quality.enabled);
+  h = hash_mix(h, static_cast<std::uint64_t>(p.quality.iterations));
+  h = hash_mix(h, static_cast<std::uint64_t>(p.quality.newton_steps));
+  return mix_box(h, p.clip);
+}
+
+std::size_t NodeCache::entry_bytes(const CachedJob& value) {
+  const std::size_t v = value.mesh ? value.mesh->positions.size() : 0;
+  const std::size_t t = value.mesh ? value.mesh->triangles.size() : 0;
+  return kEntryOverhead + 24 * v + 12 * t + value.report.fallback_cause.size();
+}
+
+std::optional<CachedJob> NodeCache::find(std::uint64_t key) {
+  std::lock_guard lock(mutex_);
+  const auto it = index_.find(key);
+  if (it == index_.end()) {
+    ++stats_.misses;
+    return std::nullopt;
+  }
+  ++stats_.hits;
+  lru_.splice(lru_.begin(), lru_, it->second);
+  return it->second->value;
+}
+
+void NodeCache::insert(std::uint64_t key, CachedJob value) {
+  const std::size_t bytes = entry_bytes(value);
+  std::lock_guard lock(mutex_);
+  if (const auto it = index_.find(key); it != index_.end()) {
+    stats_.bytes -= it->second->bytes;
+    lru_.erase(it->second);
+    index_.erase(it);
+  }
+  if (bytes > max_bytes_) return;
+  lru_.push_front(Entry{key, std::move(value), bytes});
+  index_[key] = lru_.begin();
+  stats_.bytes += bytes;
+  ++stats_.insertions;
+  evict_locked();
+}
+
+void NodeCache::evict_locked() {
+  while (stats_.bytes > max_bytes_ && !lru_.empty()) {
+    stats_.bytes -= lru_.back().bytes;
+    index_.erase(lru_.back().key);
+    lru_.pop_back();
+    ++stats_.evictions;
+  }
+}
+
+NodeCacheStats NodeCache::stats() const {
+  std::lock_guard lock(mutex_);
+  NodeCacheStats s = stats_;
+  s.entries = lru_.size();
+  return s;
+}
+
+void NodeCache::clear() {
+  std::lock_guard lock(mutex_);
+  lru_.clear();
+  index_.clear();
+  stats_.bytes = 0;
+}
+
+}  // namespace ht
