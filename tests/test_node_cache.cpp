@@ -19,8 +19,10 @@ namespace {
 constexpr double kT = 0.5;
 
 bool same_bytes(const TriangleMesh& a, const TriangleMesh& b) {
+  // memcmp is not called on empty arrays (their data() may be null).
   return a.positions.size() == b.positions.size() && a.triangles == b.triangles &&
-         std::memcmp(a.positions.data(), b.positions.data(), a.positions.size() * sizeof(dvec3)) == 0;
+         (a.positions.empty() ||
+          std::memcmp(a.positions.data(), b.positions.data(), a.positions.size() * sizeof(dvec3)) == 0);
 }
 
 bool reaches(const Graph& g, NodeId n, NodeId target) {
