@@ -2,7 +2,8 @@
 // (meshers/node_cache.hpp), then one edit meshed with the same cache. Counters: first_s, edit_s,
 // ratio = edit_s / first_s (the targets: <= 0.10 for the 250-curve character after
 // moving one curve, <= 0.25 for the winged bunny after changing the wing crop box), and the
-// jobs reused / run by the edited meshing.
+// jobs reused / run by the edited meshing, and inside the global polygonizations the bricks and
+// quality-pass slabs and bands taken from the cache (bricks_reused of bricks, pieces_reused of pieces).
 //   Snake        tools/scenes.hpp snake(): one n-ary blend of 250 curves, moved: curve 100's
 //                first point by 0.01 in x
 //   WingedBunny  examples/winged_bunny.json, the crop box's max y 0.42 -> 0.43
@@ -16,6 +17,7 @@
 
 #include <benchmark/benchmark.h>
 
+#include <array>
 #include <chrono>
 #include <cstdio>
 #include <fstream>
@@ -44,7 +46,8 @@ void run(benchmark::State& state, const Tree& before, const Tree& after) {
   o.precision = default_precision(before, 0.0) * (bench::quick_mode ? 2.0 : 1.0);
   o.blend_overlap = before.mesher_settings().blend_overlap;
   double first = 0, edit = 0;
-  std::size_t reused = 0, jobs = 0;
+  std::size_t reused = 0, jobs = 0, bricks = 0, active = 0, pieces = 0, pieces_reused = 0;
+  std::array<double, 5> stage{};  // the edited run's polygonizations: seconds by stage
   for (auto _ : state) {
     NodeCache cache(std::size_t(2) << 30);
     o.cache = &cache;
@@ -54,8 +57,16 @@ void run(benchmark::State& state, const Tree& before, const Tree& after) {
     t0 = std::chrono::steady_clock::now();
     const MeshResult b = mesh_tree(after, o);
     edit = seconds_since(t0);
-    reused = jobs = 0;
-    for (const NodeReport& r : b.nodes) reused += r.reused, ++jobs;
+    reused = jobs = bricks = active = pieces = pieces_reused = 0;
+    stage = {};
+    for (const NodeReport& r : b.nodes) {
+      reused += r.reused, ++jobs;
+      bricks += r.polygonize.bricks_reused, active += r.polygonize.bricks_active;
+      pieces += r.polygonize.quality.pieces, pieces_reused += r.polygonize.quality.pieces_reused;
+      const PolygonizeStats& p = r.polygonize;
+      stage[0] += p.seconds_classify, stage[1] += p.seconds_sample, stage[2] += p.seconds_extract;
+      stage[3] += p.seconds_merge + p.seconds_features, stage[4] += p.quality.seconds;
+    }
     benchmark::DoNotOptimize(a.mesh->triangles.size() + b.mesh->triangles.size());
   }
   state.counters["first_s"] = first;
@@ -63,6 +74,12 @@ void run(benchmark::State& state, const Tree& before, const Tree& after) {
   state.counters["ratio"] = edit / first;
   state.counters["jobs_reused"] = double(reused);
   state.counters["jobs"] = double(jobs);
+  state.counters["bricks_reused"] = double(bricks);
+  state.counters["bricks"] = double(active);
+  state.counters["pieces_reused"] = double(pieces_reused);
+  state.counters["pieces"] = double(pieces);
+  const char* names[] = {"classify_s", "sample_s", "extract_s", "merge_s", "quality_s"};
+  for (int i = 0; i < 5; ++i) state.counters[names[i]] = stage[i];
 }
 
 void BM_IncrementalSnake(benchmark::State& state) {

@@ -24,6 +24,10 @@ inline constexpr int kCells = 8;              // cells per brick side
 inline constexpr int kPoints = kCells + 1;    // grid points per brick side
 inline constexpr int kBrickPoints = kPoints * kPoints * kPoints;
 
+/// What interval analysis says of a brick: the surface stays off it (outside or inside the
+/// solid) or may cross it (active: sampled and extracted).
+enum State : std::uint8_t { kOutside = 0, kInside = 1, kActive = 2 };
+
 /// The polygonizer's grid: bricks of kCells^3 cells of side h from `origin`.
 struct Grid {
   glm::dvec3 origin;

@@ -430,6 +430,7 @@ std::shared_ptr<const TriangleMesh> Runner::global(NodeId n, const std::shared_p
   p.cancel = o_.cancel;
   p.brick_filter = {};
   p.progress = {};
+  p.pieces = o_.cache ? &o_.cache->pieces() : nullptr;
   if (report_progress && o_.progress) p.progress = [this](double f) { progress(std::min(f, 0.999)); };
   r.polygonized = true;
   // A grid that under-resolves the surface (features thinner than a cell) can leave folds the

@@ -43,9 +43,10 @@ nlohmann::json node_json(const Graph& g, const NodeReport& e) {
   if (!e.refinements.empty()) n["refinements"] = e.refinements;
   if (e.polygonized) {
     n["bricks"] = {{"total", e.polygonize.bricks_total}, {"active", e.polygonize.bricks_active},
-                   {"points_evaluated", e.polygonize.points_evaluated}};
+                   {"reused", e.polygonize.bricks_reused}, {"points_evaluated", e.polygonize.points_evaluated}};
     n["quality"] = {{"collapses", e.polygonize.quality.collapses}, {"flips", e.polygonize.quality.flips},
-                    {"moved", e.polygonize.quality.moved}, {"seconds", e.polygonize.quality.seconds}};
+                    {"moved", e.polygonize.quality.moved}, {"pieces", e.polygonize.quality.pieces},
+                    {"pieces_reused", e.polygonize.quality.pieces_reused}, {"seconds", e.polygonize.quality.seconds}};
   }
   if (e.strategy == JobStrategy::TrimBlend || e.strategy == JobStrategy::TrimBoolean ||
       e.strategy == JobStrategy::TrimCrop || e.strategy == JobStrategy::TrimLocalBlend)
@@ -71,6 +72,7 @@ PolygonizeStats total_polygonize(const MeshResult& r) {
     const PolygonizeStats& p = e.polygonize;
     s.bricks_total += p.bricks_total;
     s.bricks_active += p.bricks_active;
+    s.bricks_reused += p.bricks_reused;
     s.points_evaluated += p.points_evaluated;
     s.crease_edges += p.crease_edges;
     s.corner_vertices += p.corner_vertices;
@@ -95,6 +97,8 @@ PolygonizeStats total_polygonize(const MeshResult& r) {
     s.quality.splits += p.quality.splits;
     s.quality.moved += p.quality.moved;
     s.quality.reverted += p.quality.reverted;
+    s.quality.pieces += p.quality.pieces;
+    s.quality.pieces_reused += p.quality.pieces_reused;
     s.quality.skipped |= p.quality.skipped;
     s.quality.seconds += p.quality.seconds;
   }
@@ -199,7 +203,7 @@ std::string mesh_stats_json(const Tree& tree, const MeshRun& run, const std::str
   j["vertices"] = c.vertices;
   j["checks"] = checks_json(c);
   const PolygonizeStats stats = total_polygonize(run.result);
-  j["bricks"] = {{"total", stats.bricks_total}, {"active", stats.bricks_active}};
+  j["bricks"] = {{"total", stats.bricks_total}, {"active", stats.bricks_active}, {"reused", stats.bricks_reused}};
   j["sharp_features"] = {{"candidate_edges", stats.crease_candidates},
                          {"spread_edges", stats.crease_spread},
                          {"crease_edges_split", stats.crease_edges},

@@ -52,54 +52,19 @@ std::size_t NodeCache::entry_bytes(const CachedJob& value) {
 }
 
 std::optional<CachedJob> NodeCache::find(std::uint64_t key) {
-  std::lock_guard lock(mutex_);
-  const auto it = index_.find(key);
-  if (it == index_.end()) {
-    ++stats_.misses;
-    return std::nullopt;
-  }
-  ++stats_.hits;
-  lru_.splice(lru_.begin(), lru_, it->second);
-  return it->second->value;
+  const auto hit = jobs_.find<CachedJob>(key);
+  if (!hit) return std::nullopt;
+  return *hit;
 }
 
 void NodeCache::insert(std::uint64_t key, CachedJob value) {
   const std::size_t bytes = entry_bytes(value);
-  std::lock_guard lock(mutex_);
-  if (const auto it = index_.find(key); it != index_.end()) {
-    stats_.bytes -= it->second->bytes;
-    lru_.erase(it->second);
-    index_.erase(it);
-  }
-  if (bytes > max_bytes_) return;
-  lru_.push_front(Entry{key, std::move(value), bytes});
-  index_[key] = lru_.begin();
-  stats_.bytes += bytes;
-  ++stats_.insertions;
-  evict_locked();
-}
-
-void NodeCache::evict_locked() {
-  while (stats_.bytes > max_bytes_ && !lru_.empty()) {
-    stats_.bytes -= lru_.back().bytes;
-    index_.erase(lru_.back().key);
-    lru_.pop_back();
-    ++stats_.evictions;
-  }
-}
-
-NodeCacheStats NodeCache::stats() const {
-  std::lock_guard lock(mutex_);
-  NodeCacheStats s = stats_;
-  s.entries = lru_.size();
-  return s;
+  jobs_.insert<CachedJob>(key, std::make_shared<const CachedJob>(std::move(value)), bytes);
 }
 
 void NodeCache::clear() {
-  std::lock_guard lock(mutex_);
-  lru_.clear();
-  index_.clear();
-  stats_.bytes = 0;
+  jobs_.clear();
+  pieces_.clear();
 }
 
 }  // namespace ht

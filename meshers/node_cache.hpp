@@ -3,20 +3,19 @@
 // runtime/subtree_hash.hpp, the job's strategy and reason, its inputs' keys, and every mesh
 // option that changes output). A job whose key is present does not run; its result is reused.
 //
-// Bounded in bytes (24 per vertex + 12 per triangle of the cached meshes, plus a fixed entry
-// overhead); inserting past the bound evicts least-recently-used entries (an entry larger than
-// the bound is not kept). Thread-safe: one mutex; find() and insert() may be called from any
-// job of any run at once. Meshes are shared, immutable (shared_ptr<const>): an evicted entry
+// Bounded in bytes: half the bound for job results (24 per vertex + 12 per triangle of the
+// cached meshes, plus a fixed entry overhead), half for the parts of global polygonizations
+// (pieces(), meshers/piece_cache.hpp); each half evicts its least-recently-used entries (an
+// entry larger than its half is not kept). Thread-safe: find() and insert() may be called from
+// any job of any run at once. Meshes are shared, immutable (shared_ptr<const>): an evicted entry
 // stays alive while a run still holds it.
 #pragma once
 
 #include "meshers/mesh_plan.hpp"
+#include "meshers/piece_cache.hpp"
 
 #include <cstdint>
-#include <list>
-#include <mutex>
 #include <optional>
-#include <unordered_map>
 
 namespace ht {
 
@@ -31,14 +30,14 @@ struct CachedJob {
   NodeReport report;
 };
 
-struct NodeCacheStats {
-  std::size_t hits = 0, misses = 0, insertions = 0, evictions = 0;
-  std::size_t entries = 0, bytes = 0;
-};
+/// Hits, misses, insertions, evictions, entries and bytes, as a PieceCache counts them.
+using NodeCacheStats = PieceCacheStats;
 
+/// Job results in one least-recently-used store, parts of polygonizations in another.
 class NodeCache {
  public:
-  explicit NodeCache(std::size_t max_bytes) : max_bytes_(max_bytes) {}
+  /// Half of `max_bytes` holds job results, half the parts of polygonizations (pieces()).
+  explicit NodeCache(std::size_t max_bytes) : jobs_(max_bytes - max_bytes / 2), pieces_(max_bytes / 2) {}
   NodeCache(const NodeCache&) = delete;
   NodeCache& operator=(const NodeCache&) = delete;
 
@@ -46,26 +45,22 @@ class NodeCache {
   std::optional<CachedJob> find(std::uint64_t key);
   /// Stores (or refreshes) `key`, then evicts LRU entries until the bound holds.
   void insert(std::uint64_t key, CachedJob value);
-  NodeCacheStats stats() const;
-  std::size_t max_bytes() const { return max_bytes_; }
+  /// The job results' store (pieces() counts its own).
+  NodeCacheStats stats() const { return jobs_.stats(); }
+  std::size_t max_bytes() const { return jobs_.max_bytes() + pieces_.max_bytes(); }
   void clear();
 
   /// The bytes an entry is charged.
   static std::size_t entry_bytes(const CachedJob& value);
 
- private:
-  struct Entry {
-    std::uint64_t key;
-    CachedJob value;
-    std::size_t bytes;
-  };
-  void evict_locked();
+  /// Bricks and quality-pass pieces of the global polygonizations the jobs ran
+  /// (PolygonizeOptions::pieces): a job whose subtree changed re-runs, but its polygonization
+  /// takes what did not change from here. Thread-safe as the node cache is.
+  PieceCache& pieces() { return pieces_; }
+  const PieceCache& pieces() const { return pieces_; }
 
-  std::size_t max_bytes_;
-  mutable std::mutex mutex_;
-  std::list<Entry> lru_;  // front: most recently used
-  std::unordered_map<std::uint64_t, std::list<Entry>::iterator> index_;
-  NodeCacheStats stats_;
+ private:
+  PieceCache jobs_, pieces_;
 };
 
 }  // namespace ht

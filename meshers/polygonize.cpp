@@ -5,6 +5,8 @@
 
 #include "meshers/brick_extract.hpp"
 #include "meshers/features.hpp"
+#include "meshers/piece_cache.hpp"
+#include "meshers/polygonize_reuse.hpp"
 #include "meshers/quality.hpp"
 #include "meshers/relax.hpp"
 #include "meshers/self_intersections.hpp"
@@ -41,12 +43,14 @@ using brick::Grid;
 using brick::kBrickPoints;
 using brick::kCells;
 using brick::kPoints;
+using brick::kActive;
+using brick::kInside;
+using brick::kOutside;
 
 constexpr double kSnap = 0.01;     // of a grid edge: a vertex this near a grid point merges there
 constexpr int kUntangleRounds = 4;  // of sliding crease points where the feature step folded
 constexpr int kUnfoldRounds = 12;   // of collapsing the folds sliding left
 constexpr int kFoldTurns = 3;       // of collapsing, then relaxing, what stays folded
-enum State : std::uint8_t { kOutside = 0, kInside = 1, kActive = 2 };
 
 double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -268,7 +272,7 @@ void crease_phase(RootField& field, const FeatureOptions& features, double h, Tr
 // sheets beside a crease), what it left intersecting is collapsed away too.
 void quality_phase(SurfaceField& field, RootField& root_field, double h, const QualityOptions& options,
                    MemoryBudget& budget, TriangleMesh& mesh, const std::vector<std::uint8_t>& on_crease,
-                   PolygonizeStats& stats) {
+                   const QualityReuse* reuse, PolygonizeStats& stats) {
   const MemoryReservation held(budget, kQualityBytesPerVertex * double(mesh.positions.size()),
                                "the quality pass on " + std::to_string(mesh.positions.size()) + " vertices");
   const double T = root_field.T;
@@ -279,7 +283,7 @@ void quality_phase(SurfaceField& field, RootField& root_field, double h, const Q
     for (std::size_t v = 0; v < keep.size(); ++v) keep[v] |= near[v];
   }
   std::vector<std::uint8_t> crease_after;
-  improve_quality(mesh, keep, on_crease, on_bricks, T, h, options, &stats.quality, &crease_after);
+  improve_quality(mesh, keep, on_crease, on_bricks, T, h, options, &stats.quality, &crease_after, reuse);
   auto left = find_self_intersections(mesh, std::numeric_limits<std::size_t>::max()).examples;
   stats.quality_intersections = stats.crease_intersections = left.size();
   if (!left.empty()) resolve_folds(mesh, crease_after, root_field.get(), T, h, left, stats);
@@ -387,10 +391,27 @@ TriangleMesh polygonize(std::shared_ptr<const Graph> graph, NodeId root, double 
   };
   const BlockTapes blocks = block_tapes(graph, root, T, grid, active);
   tbb::parallel_for(std::size_t(0), active.size(), [&](std::size_t a) {
-    if (cancelled()) return;
     const glm::ivec3 b = grid.brick_at(active[a]);
     tapes[a] = std::make_shared<const Tape>(narrow_tape(*blocks.tapes[blocks.of[a]], grid.box(b, b + 1)));
-    const TapeEvaluator eval(tapes[a]);
+  });
+  // Bricks extracted by an earlier run with the same key (meshers/polygonize_reuse.hpp) are
+  // neither sampled nor extracted; their neighbours sample the points they own with their tapes.
+  brick::BrickView view{&grid, &state, &slot, {}};
+  std::vector<std::shared_ptr<const brick::KeptBrick>> kept(active.size());
+  std::vector<std::uint64_t> keys;
+  if (options.pieces && !options.brick_filter && !clipped) {
+    view.tape_hash = brick::tape_hashes(tapes);
+    keys.resize(active.size());
+    tbb::parallel_for(std::size_t(0), active.size(), [&](std::size_t a) {
+      keys[a] = brick::brick_key(view, grid.brick_at(active[a]), T, options);
+      kept[a] = options.pieces->find<brick::KeptBrick>(keys[a]);
+    });
+    for (const auto& k : kept) stats.bricks_reused += k != nullptr;
+  }
+  // Evaluates brick a's points whose sampled owner is `owner` (kNone: a itself, or an owner that
+  // was not sampled) with `eval`, into a's values; returns how many.
+  auto sample = [&](std::size_t a, const TapeEvaluator& eval, std::uint32_t owner) {
+    const glm::ivec3 b = grid.brick_at(active[a]);
     float xs[kBrickPoints], ys[kBrickPoints], zs[kBrickPoints], fs[kBrickPoints];
     std::uint16_t which[kBrickPoints];
     int m = 0, n = 0;
@@ -398,7 +419,7 @@ TriangleMesh polygonize(std::shared_ptr<const Graph> graph, NodeId root, double 
       for (int j = 0; j < kPoints; ++j)
         for (int i = 0; i < kPoints; ++i, ++n) {
           std::size_t at = 0;
-          if (sampled_owner(b, {i, j, k}, at) != kNone) continue;
+          if (sampled_owner(b, {i, j, k}, at) != owner) continue;
           const glm::dvec3 p = grid.position(glm::i64vec3(b) * std::int64_t(kCells) + glm::i64vec3(i, j, k));
           which[m] = static_cast<std::uint16_t>(n);
           xs[m] = static_cast<float>(p.x);
@@ -408,13 +429,26 @@ TriangleMesh polygonize(std::shared_ptr<const Graph> graph, NodeId root, double 
         }
     for (int at = 0; at < m; at += kBlock) eval.field_block(xs + at, ys + at, zs + at, std::min(kBlock, m - at), fs + at);
     for (int q = 0; q < m; ++q) values[a * kBrickPoints + which[q]] = fs[q];
-    evaluated += std::size_t(m);
+    return std::size_t(m);
+  };
+  tbb::parallel_for(std::size_t(0), active.size(), [&](std::size_t a) {
+    if (cancelled() || kept[a]) return;
+    std::size_t m = sample(a, TapeEvaluator(tapes[a]), kNone);
+    const glm::ivec3 b = grid.brick_at(active[a]);
+    for (int d = 1; d < 8; ++d) {  // + neighbours kept from the cache: their points, their tapes
+      const glm::ivec3 c = b + glm::ivec3(d & 1, (d >> 1) & 1, (d >> 2) & 1);
+      if (glm::any(glm::greaterThanEqual(c, grid.bricks))) continue;
+      const std::size_t ci = grid.brick_index(c);
+      if (state[ci] == kActive && slot[ci] != kNone && kept[slot[ci]]) m += sample(a, TapeEvaluator(tapes[slot[ci]]), slot[ci]);
+    }
+    evaluated += m;
     report(0.05, 0.55);
   });
   if (cancelled()) throw MeshCancelled("meshing was cancelled");
   // The + face points from their owners, which evaluated them themselves (an owner's point at
   // `at` lies on none of its own + faces that lead to a sampled brick).
   tbb::parallel_for(std::size_t(0), active.size(), [&](std::size_t a) {
+    if (kept[a]) return;
     const glm::ivec3 b = grid.brick_at(active[a]);
     for (int k = 0; k < kPoints; ++k)
       for (int j = 0; j < kPoints; ++j)
@@ -422,22 +456,22 @@ TriangleMesh polygonize(std::shared_ptr<const Graph> graph, NodeId root, double 
           if (i < kCells && j < kCells && k < kCells) continue;
           std::size_t at = 0;
           const std::uint32_t s = sampled_owner(b, {i, j, k}, at);
-          if (s != kNone) values[a * kBrickPoints + std::size_t(i + kPoints * (j + kPoints * k))] = values[std::size_t(s) * kBrickPoints + at];
+          if (s != kNone && !kept[s])
+            values[a * kBrickPoints + std::size_t(i + kPoints * (j + kPoints * k))] = values[std::size_t(s) * kBrickPoints + at];
         }
   });
   stats.points_evaluated = evaluated.load();
   stats.seconds_sample = seconds_since(t0);
 
   // Inside labels: a grid point shared by bricks takes the label of the brick that owns it (the
-  // one where it is not on the + faces), so that every cell around it agrees.
+  // one where it is not on the + faces), so that every cell around it agrees. Where the owner is
+  // active its value was sampled into `own` (copied, or evaluated with the owner's tape).
   auto inside = [&](glm::ivec3 b, glm::ivec3 local, const float* own) {
     glm::ivec3 at;
     const glm::ivec3 owner = owner_of(b, local, at);
-    if (owner == b) return own[local.x + kPoints * (local.y + kPoints * local.z)] >= float(T);
     const std::size_t oi = grid.brick_index(owner);
-    if (state[oi] != kActive) return state[oi] == kInside;
-    if (slot[oi] == kNone) return own[local.x + kPoints * (local.y + kPoints * local.z)] >= float(T);
-    return values[std::size_t(slot[oi]) * kBrickPoints + std::size_t(at.x + kPoints * (at.y + kPoints * at.z))] >= float(T);
+    if (owner != b && state[oi] != kActive) return state[oi] == kInside;
+    return own[local.x + kPoints * (local.y + kPoints * local.z)] >= float(T);
   };
 
   // 3. Marching tetrahedra per brick; vertices on grid edges refined along the edge.
@@ -448,8 +482,14 @@ TriangleMesh polygonize(std::shared_ptr<const Graph> graph, NodeId root, double 
   done = 0;
   tbb::parallel_for(std::size_t(0), active.size(), [&](std::size_t a) {
     if (cancelled()) return;
+    if (kept[a]) {
+      outputs[a] = kept[a]->out;
+      if (kept[a]->reaches_boundary) reaches_boundary = true;
+      return;
+    }
     const glm::ivec3 b = grid.brick_at(active[a]);
     const float* own = values.data() + a * kBrickPoints;
+    bool boundary = false;
     std::uint8_t label[kBrickPoints];
     for (int k = 0; k < kPoints; ++k)
       for (int j = 0; j < kPoints; ++j)
@@ -460,8 +500,9 @@ TriangleMesh polygonize(std::shared_ptr<const Graph> graph, NodeId root, double 
       if (!label[n]) continue;
       const glm::i64vec3 p = base + glm::i64vec3(n % kPoints, (n / kPoints) % kPoints, n / (kPoints * kPoints));
       if (p.x == 0 || p.y == 0 || p.z == 0 || p.x == grid.points.x - 1 || p.y == grid.points.y - 1 || p.z == grid.points.z - 1)
-        reaches_boundary = true;
+        boundary = true;
     }
+    if (boundary) reaches_boundary = true;
     BrickOutput& out = outputs[a];
     brick::Scratch& sc = scratch.local();
     brick::march(grid, b, label, sc, out);
@@ -470,6 +511,11 @@ TriangleMesh polygonize(std::shared_ptr<const Graph> graph, NodeId root, double 
                           out);
     // Exact normals for the vertices of cells that may hold a crease (meshers/features.hpp).
     if (options.sharp_features && may_have_creases(*tapes[a])) brick::crease_normals(own, eval, options.features, sc, out);
+    if (!keys.empty())
+      if (auto k = std::make_shared<const brick::KeptBrick>(brick::KeptBrick{out, boundary})) {
+        const std::size_t bytes = brick::kept_bytes(*k);
+        options.pieces->insert<brick::KeptBrick>(keys[a], std::move(k), bytes);
+      }
     report(0.6, 0.3);
   });
   stats.seconds_extract = seconds_since(t0);
@@ -497,7 +543,12 @@ TriangleMesh polygonize(std::shared_ptr<const Graph> graph, NodeId root, double 
   if (options.quality.enabled && !options.brick_filter && !clipped) {
     SurfaceField field(graph, root, T, grid.origin, kCells * h);
     for (std::size_t a = 0; a < active.size(); ++a) field.adopt(grid.brick_at(active[a]), tapes[a]);
-    quality_phase(field, root_field, h, options.quality, budget, mesh, on_crease, stats);
+    QualityReuse reuse;
+    if (!keys.empty()) {
+      reuse.cache = options.pieces;
+      reuse.scope = [&view](const Aabb& box) { return brick::field_scope(view, box); };
+    }
+    quality_phase(field, root_field, h, options.quality, budget, mesh, on_crease, keys.empty() ? nullptr : &reuse, stats);
   }
   if (options.progress) options.progress(1.0);
   if (stats_out) *stats_out = stats;

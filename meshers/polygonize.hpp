@@ -33,6 +33,8 @@
 
 namespace ht {
 
+class PieceCache;
+
 struct PolygonizeOptions {
   double precision = 0.0;                        ///< cell size (about the edge length); > 0
   std::size_t memory_budget = std::size_t(4) << 30;  ///< bytes the polygonizer may use (when `budget` is null)
@@ -62,10 +64,16 @@ struct PolygonizeOptions {
   Aabb clip;
   /// Polled between bricks; when it reads true the polygonizer throws MeshCancelled.
   const std::atomic<bool>* cancel = nullptr;
+  /// Parts of earlier runs (not owned; meshers/piece_cache.hpp): bricks whose extraction and
+  /// quality-pass slabs and bands whose work was done before with the same inputs and field are
+  /// taken from it, the others stored in it (meshers/polygonize_reuse.hpp). The mesh is the same,
+  /// byte for byte, with or without it. Not used with a brick_filter or a clip.
+  PieceCache* pieces = nullptr;
 };
 
 struct PolygonizeStats {
   std::size_t bricks_total = 0, bricks_active = 0;
+  std::size_t bricks_reused = 0;  ///< active bricks taken from PolygonizeOptions::pieces
   std::size_t points_evaluated = 0;
   std::size_t crease_edges = 0, corner_vertices = 0;  ///< sharp features (meshers/features.hpp)
   std::size_t crease_candidates = 0, crease_spread = 0;  ///< CreaseStats::candidate_edges, spread_edges

@@ -1,4 +1,5 @@
 #include "meshers/quality.hpp"
+#include "meshers/quality_whole.hpp"
 
 #include "meshers/relax.hpp"
 #include "meshers/submesh.hpp"
@@ -27,9 +28,6 @@ constexpr double kNeedleRatio = 0.5;                // ... when that edge is thi
 constexpr double kCoplanarCos = 0.9063077870366499; // cos 25 degrees: flips only between such faces
 constexpr double kTurnCos = 0.5;                    // cos 60 degrees: a face may not turn further
 constexpr double kKeepPlaneCos = 0.9396926207859084; // cos 20 degrees: a collapse may not turn a sound face further
-constexpr std::size_t kPieceTriangles = 16384;  // triangles per slab the pass works on alone
-constexpr std::size_t kMaxPieces = 64;
-constexpr int kBandRings = 3;                    // rings around the triangles between slabs, reworked after
 constexpr double kSpeck = 1e-3;                     // an edge this many cells long is a speck
 constexpr double kMergeFraction = 0.1;              // crease points closer than this many cells become one
 constexpr double kDegenerateCos = 0.9999619230641713; // cos 0.5 degrees: no collapse leaves a face this thin
@@ -472,6 +470,8 @@ class Improver {
   bool ok_ = false;
 };
 
+}  // namespace
+
 void improve_whole(TriangleMesh& mesh, std::span<const std::uint8_t> locked, std::span<const std::uint8_t> crease,
                    const BatchField& field, double T, double h, const QualityOptions& options, QualityStats& st,
                    std::vector<std::uint32_t>& origin) {
@@ -484,96 +484,6 @@ void improve_whole(TriangleMesh& mesh, std::span<const std::uint8_t> locked, std
   }
   im.run(st);
   im.result(mesh, origin);
-}
-
-// Vertex slabs along the mesh's longest axis with equal numbers of vertices: how many depends on
-// the mesh alone, never on the thread count, so the result does not either.
-std::vector<std::uint32_t> slabs(const TriangleMesh& mesh, std::size_t count) {
-  glm::dvec3 lo(std::numeric_limits<double>::max()), hi(-std::numeric_limits<double>::max());
-  for (const glm::dvec3& p : mesh.positions) lo = glm::min(lo, p), hi = glm::max(hi, p);
-  const glm::dvec3 size = hi - lo;
-  const int axis = size.x >= size.y && size.x >= size.z ? 0 : size.y >= size.z ? 1 : 2;
-  std::vector<double> sorted(mesh.positions.size());
-  for (std::size_t v = 0; v < sorted.size(); ++v) sorted[v] = mesh.positions[v][axis];
-  std::sort(sorted.begin(), sorted.end());
-  std::vector<double> cuts;
-  for (std::size_t k = 1; k < count; ++k) cuts.push_back(sorted[k * sorted.size() / count]);
-  std::vector<std::uint32_t> slab(mesh.positions.size());
-  for (std::size_t v = 0; v < slab.size(); ++v)
-    slab[v] = std::uint32_t(std::upper_bound(cuts.begin(), cuts.end(), mesh.positions[v][axis]) - cuts.begin());
-  return slab;
-}
-
-// Each part improved on its own, in parallel, its rim locked; put back in part order.
-// renumber[v] receives each old vertex's new index, ~0u for the collapsed.
-void improve_pieces(TriangleMesh& mesh, const Pieces& pieces, std::span<const std::uint8_t> locked,
-                    std::span<const std::uint8_t> crease, const BatchField& field, double T, double h,
-                    const QualityOptions& options, QualityStats& st, std::vector<std::uint32_t>& renumber) {
-  const std::size_t n = pieces.parts.size();
-  std::vector<TriangleMesh> changed(n);
-  std::vector<std::vector<std::uint32_t>> origin(n);
-  std::vector<QualityStats> part_stats(n);
-  tbb::parallel_for(std::size_t(0), n, [&](std::size_t i) {
-    const Submesh& sub = pieces.parts[i];
-    std::vector<std::uint8_t> keep(sub.origin.size()), on_crease(crease.empty() ? 0 : sub.origin.size());
-    for (std::size_t v = 0; v < keep.size(); ++v) keep[v] = sub.rim[v] || (!locked.empty() && locked[sub.origin[v]]);
-    for (std::size_t v = 0; v < on_crease.size(); ++v) on_crease[v] = crease[sub.origin[v]];
-    changed[i] = sub.mesh;
-    improve_whole(changed[i], keep, on_crease, field, T, h, options, part_stats[i], origin[i]);
-    for (std::uint32_t& o : origin[i])
-      if (o != ~0u) o = sub.origin[o];
-  });
-  for (const QualityStats& p : part_stats) {
-    st.collapses += p.collapses, st.flips += p.flips, st.splits += p.splits;
-    st.moved += p.moved, st.reverted += p.reverted, st.skipped |= p.skipped;
-  }
-  put_back(mesh, pieces, changed, origin, &renumber);
-}
-
-}  // namespace
-
-void improve_quality(TriangleMesh& mesh, std::span<const std::uint8_t> locked, std::span<const std::uint8_t> crease,
-                     const BatchField& field, double threshold, double h, const QualityOptions& options,
-                     QualityStats* stats, std::vector<std::uint8_t>* crease_after) {
-  const auto t0 = std::chrono::steady_clock::now();
-  QualityStats st;
-  if (crease_after) crease_after->assign(crease.begin(), crease.end());
-  if (options.enabled && !mesh.triangles.empty()) {
-    // Slabs first, in parallel, their rims locked; then the band of triangles between slabs.
-    const std::size_t count = std::clamp<std::size_t>(mesh.triangles.size() / kPieceTriangles, 1, kMaxPieces);
-    const std::vector<std::uint32_t> slab = slabs(mesh, count);
-    std::vector<std::uint32_t> piece_of(mesh.triangles.size());
-    for (std::size_t t = 0; t < piece_of.size(); ++t) {
-      const glm::uvec3 tri = mesh.triangles[t];
-      piece_of[t] = slab[tri[0]] == slab[tri[1]] && slab[tri[0]] == slab[tri[2]] ? slab[tri[0]] : ~0u;
-    }
-    const Pieces pieces = take_pieces(mesh, std::move(piece_of), count);
-    std::vector<std::uint8_t> band(mesh.positions.size(), 0);
-    for (const glm::uvec3& t : pieces.rest) band[t[0]] = band[t[1]] = band[t[2]] = 1;
-    std::vector<std::uint32_t> renumber;
-    improve_pieces(mesh, pieces, locked, crease, field, threshold, h, options, st, renumber);
-    // The band's vertices were rims, locked: they survive, under new indices.
-    auto moved = [&](std::span<const std::uint8_t> flags) {
-      std::vector<std::uint8_t> out(mesh.positions.size(), 0);
-      if (!flags.empty())
-        for (std::size_t v = 0; v < renumber.size(); ++v)
-          if (renumber[v] != ~0u) out[renumber[v]] = flags[v];
-      return out;
-    };
-    if (crease_after && !crease.empty()) *crease_after = moved(crease);
-    if (!pieces.rest.empty()) {
-      // Three rings around it: the slabs' rims and their neighbours did not move, nor will a
-      // region's rim and its neighbours.
-      std::vector<std::uint8_t> region = moved(band);
-      const std::vector<std::uint8_t> any(region.size(), 1), around = rings_around(mesh, region, any, kBandRings);
-      for (std::size_t v = 0; v < region.size(); ++v) region[v] |= around[v];
-      const std::vector<std::uint8_t> locked2 = moved(locked), crease2 = moved(crease);
-      improve_pieces(mesh, take_region(mesh, region, true), locked2, crease2, field, threshold, h, options, st, renumber);
-      if (crease_after && !crease.empty()) *crease_after = moved(crease2);
-    }
-  }
-  st.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
-  if (stats) *stats = st;
 }
 
 }  // namespace ht

@@ -18,19 +18,23 @@
 // the user's meshes) neither move nor go away, and no edge between two of them is flipped or
 // collapsed, so creases stay sharp and open patches keep their rims.
 //
-// The mesh is cut into slabs of about 16k triangles along its longest axis; the slabs are
-// worked on in parallel with their rims locked, then the bands between them (three rings wide),
-// in parallel too, each connected band on its own. Deterministic: the slabs and bands depend on
-// the mesh alone, never on the thread count; in a slab the topological steps visit the mesh in a
-// fixed order and the relaxation is a Jacobi step (every vertex moves from the previous
-// positions).
+// The mesh is cut into slabs across its longest axis, kSlabCells precisions thick, at fixed
+// places in space (multiples of the slab's thickness from the origin); the slabs are worked on in
+// parallel with their rims locked, then the bands between them (three rings wide), in parallel
+// too, each connected band on its own. Deterministic: the slabs and bands depend on the mesh
+// alone, never on the thread count; in a slab the topological steps visit the mesh in a fixed
+// order and the relaxation is a Jacobi step (every vertex moves from the previous positions).
+// Because slabs sit at fixed places, an edit of the surface changes the input of the slabs and
+// bands it touches only, and with a PieceCache (QualityReuse) the others are not worked on again.
 #pragma once
 
 #include "meshers/batch_field.hpp"
 #include "meshers/triangle_mesh.hpp"
+#include "runtime/aabb.hpp"
 
 #include <cstddef>
 #include <cstdint>
+#include <functional>
 #include <span>
 
 namespace ht {
@@ -47,10 +51,31 @@ struct QualityOptions {
   int newton_steps = 1; ///< projection steps per relaxation
 };
 
+/// Slabs are this many precisions thick.
+inline constexpr double kSlabCells = 24.0;
+
+class PieceCache;
+
+/// What the pass may take from earlier runs (incremental re-meshing, meshers/piece_cache.hpp).
+struct QualityReuse {
+  PieceCache* cache = nullptr;  ///< not owned; null: nothing is reused or kept
+  /// What the field is over a region: `key` hashes the tapes it evaluates there (0: nothing can
+  /// be said), `covers` the points where that holds.
+  struct Scope {
+    std::uint64_t key = 0;
+    std::function<bool(const glm::dvec3&)> covers;
+  };
+  /// The field's scope over a box; called from several threads at once. A slab or band is kept
+  /// under a hash of its input and its box's scope when every point the work evaluated the field
+  /// at was covered (so that the same input with the same key gives the same output).
+  std::function<Scope(const Aabb&)> scope;
+};
+
 struct QualityStats {
   std::size_t collapses = 0, flips = 0, splits = 0;
   std::size_t moved = 0;     ///< vertex moves kept over all relaxations
   std::size_t reverted = 0;  ///< vertex moves undone
+  std::size_t pieces = 0, pieces_reused = 0;  ///< slabs and bands worked on, and of those taken from a QualityReuse
   bool skipped = false;      ///< the mesh was not a manifold OpenMesh accepts; left as it was
   double seconds = 0.0;
 };
@@ -62,8 +87,11 @@ struct QualityStats {
 /// pass works on slabs of the mesh in parallel, then on the bands between them). `h` is the
 /// precision (world units). Vertex indices change; with `crease_after`, receives the crease flags
 /// renumbered with them.
+/// With `reuse`, slabs and bands whose input and field were seen before are taken from its cache
+/// (the result is the same, bit for bit) and the others are stored there.
 void improve_quality(TriangleMesh& mesh, std::span<const std::uint8_t> locked, std::span<const std::uint8_t> crease,
                      const BatchField& field, double threshold, double h, const QualityOptions& options = {},
-                     QualityStats* stats = nullptr, std::vector<std::uint8_t>* crease_after = nullptr);
+                     QualityStats* stats = nullptr, std::vector<std::uint8_t>* crease_after = nullptr,
+                     const QualityReuse* reuse = nullptr);
 
 }  // namespace ht

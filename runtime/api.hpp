@@ -246,7 +246,8 @@ class HYBRIDTREE_API Session {
   /// As tree.mesh(options), reusing and filling the cache; stats.reused_nodes and
   /// stats.cache_misses say what was reused, and stats.json has "cache".
   Mesh mesh(const Tree& tree, const MeshOptions& options = {});
-  /// Bytes the cache holds now, and its entries.
+  /// Bytes the cache holds now, and its entries: job results and parts of global
+  /// polygonizations (bricks, quality-pass slabs and bands), within the bound given.
   std::size_t cache_bytes() const;
   std::size_t cache_entries() const;
   void clear();

@@ -86,8 +86,10 @@ Mesh Session::mesh(const Tree& tree, const MeshOptions& options) { return mesh_w
 
 Session::Session(std::size_t cache_bytes) : impl_(std::make_unique<Impl>(cache_bytes)) {}
 Session::~Session() = default;
-std::size_t Session::cache_bytes() const { return impl_->cache.stats().bytes; }
-std::size_t Session::cache_entries() const { return impl_->cache.stats().entries; }
+std::size_t Session::cache_bytes() const { return impl_->cache.stats().bytes + impl_->cache.pieces().stats().bytes; }
+std::size_t Session::cache_entries() const {
+  return impl_->cache.stats().entries + impl_->cache.pieces().stats().entries;
+}
 void Session::clear() { impl_->cache.clear(); }
 
 void write_mesh(std::span<const double> vertices, std::span<const std::uint32_t> triangles, const std::string& file) {

@@ -18,13 +18,6 @@ namespace {
 
 constexpr double kT = 0.5;
 
-bool same_bytes(const TriangleMesh& a, const TriangleMesh& b) {
-  // memcmp is not called on empty arrays (their data() may be null).
-  return a.positions.size() == b.positions.size() && a.triangles == b.triangles &&
-         (a.positions.empty() ||
-          std::memcmp(a.positions.data(), b.positions.data(), a.positions.size() * sizeof(dvec3)) == 0);
-}
-
 bool reaches(const Graph& g, NodeId n, NodeId target) {
   if (n == target) return true;
   for (NodeId c : g.children_of(n))
@@ -79,7 +72,7 @@ void check_edit(const Tree& before, const Tree& after, NodeId edited, Tally& tal
   ASSERT_EQ(scratch.has_value(), incremental.has_value());
   if (!scratch) return;
   ++tally.compared;
-  ASSERT_TRUE(same_bytes(*scratch->mesh, *incremental->mesh));
+  ASSERT_TRUE(test::same_bytes(*scratch->mesh, *incremental->mesh));
   bool hit = false;
   for (const NodeReport& r : incremental->nodes) {
     if (r.reused) {
@@ -154,7 +147,7 @@ TEST(NodeCache, IdenticalSubtreesShareOneEntry) {
   ASSERT_TRUE(again);
   ASSERT_EQ(again->nodes.size(), 1u);
   EXPECT_TRUE(again->nodes[0].reused);
-  EXPECT_TRUE(same_bytes(*again->mesh, *try_mesh(alone, nullptr)->mesh));
+  EXPECT_TRUE(test::same_bytes(*again->mesh, *try_mesh(alone, nullptr)->mesh));
 }
 
 TEST(NodeCache, EvictionUnderATinyBoundKeepsResultsIdentical) {
@@ -172,7 +165,7 @@ TEST(NodeCache, EvictionUnderATinyBoundKeepsResultsIdentical) {
 }
 
 TEST(NodeCache, LeastRecentlyUsedGoesFirst) {
-  NodeCache cache(3 * NodeCache::entry_bytes(CachedJob{}));
+  NodeCache cache(2 * 3 * NodeCache::entry_bytes(CachedJob{}));  // half of the bound is for pieces
   for (std::uint64_t k = 1; k <= 3; ++k) cache.insert(k, CachedJob{});
   ASSERT_TRUE(cache.find(1));  // 2 is now the oldest
   cache.insert(4, CachedJob{});

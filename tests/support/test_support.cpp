@@ -3,6 +3,7 @@
 #include <gtest/gtest.h>
 
 #include <array>
+#include <cstring>
 #include <cstdio>
 #include <exception>
 #include <fstream>
@@ -63,6 +64,13 @@ Rng seeded() {
   for (const char* s = ::testing::UnitTest::GetInstance()->current_test_info()->name(); *s; ++s)
     h = (h ^ static_cast<unsigned char>(*s)) * 1099511628211ull;
   return Rng(h);
+}
+
+bool same_bytes(const TriangleMesh& a, const TriangleMesh& b) {
+  // memcmp is not called on empty arrays (their data() may be null).
+  return a.positions.size() == b.positions.size() && a.triangles == b.triangles &&
+         (a.positions.empty() ||
+          std::memcmp(a.positions.data(), b.positions.data(), a.positions.size() * sizeof(glm::dvec3)) == 0);
 }
 
 MeshOptions mesh_options(double h, MeshStrategy s) {

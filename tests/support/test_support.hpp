@@ -48,6 +48,9 @@ void run_on_stack(std::size_t bytes, const std::function<void()>& fn);
 /// Mesh plan options at precision h with strategy s (meshers/mesh_plan.hpp).
 MeshOptions mesh_options(double h, MeshStrategy s = MeshStrategy::Auto);
 
+/// Whether two meshes are the same bit for bit: positions (doubles compared as bytes) and triangles.
+bool same_bytes(const TriangleMesh& a, const TriangleMesh& b);
+
 /// Deterministic random numbers: every property test seeds from its own name.
 using Rng = std::mt19937_64;
 

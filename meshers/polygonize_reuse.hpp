@@ -1,0 +1,53 @@
+// What the global polygonizer (meshers/polygonize.hpp) takes from earlier runs, brick by brick
+// (incremental re-meshing, issue 15). Internal to the polygonizer.
+//
+// A brick's extraction (its triangles and vertices, meshers/brick_extract.hpp) reads its own
+// tape's values at its grid points, the values its + neighbours' tapes give at the points they
+// own, or their inside/outside states where they are not sampled, and the grid and options. Its
+// key hashes all of these, tapes by content (instructions, constants, mesh leaves' contents), so
+// a brick whose key is in the PieceCache has the same output as when it is extracted, and is not
+// sampled or extracted again.
+//
+// The quality pass's pieces are keyed the same way through QualityReuse::Scope: the tapes of the
+// active bricks over a box, and a test that a point lies in one of them.
+#pragma once
+
+#include "meshers/brick_extract.hpp"
+#include "meshers/polygonize.hpp"
+#include "meshers/quality.hpp"
+#include "runtime/tape.hpp"
+
+#include <cstdint>
+#include <memory>
+#include <vector>
+
+namespace ht::brick {
+
+/// A brick's extraction as the cache keeps it.
+struct KeptBrick {
+  BrickOutput out;
+  bool reaches_boundary = false;  ///< a grid point on the grid's outer faces is inside
+};
+
+/// The polygonizer's bricks as the keys see them: the grid, each brick's state (0 outside,
+/// 1 inside, 2 active: meshers/polygonize.cpp), each active brick's slot and tape.
+struct BrickView {
+  const Grid* grid = nullptr;
+  const std::vector<std::uint8_t>* state = nullptr;
+  const std::vector<std::uint32_t>* slot = nullptr;  ///< by brick index; kNone where not active
+  std::vector<std::uint64_t> tape_hash;              ///< by slot
+};
+
+/// Content hashes of the active bricks' tapes (meshes by their contents, each hashed once).
+std::vector<std::uint64_t> tape_hashes(const std::vector<std::shared_ptr<const Tape>>& tapes);
+
+/// The key of active brick `b`'s extraction with these options and threshold.
+std::uint64_t brick_key(const BrickView& view, glm::ivec3 b, double T, const PolygonizeOptions& options);
+
+/// The field's scope over a box for the quality pass: the active bricks the box meets.
+QualityReuse::Scope field_scope(const BrickView& view, const Aabb& box);
+
+/// The bytes a kept brick is charged in the cache.
+std::size_t kept_bytes(const KeptBrick& k);
+
+}  // namespace ht::brick

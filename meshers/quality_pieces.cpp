@@ -1,0 +1,200 @@
+// The quality pass over a whole mesh (meshers/quality.hpp): slabs at fixed places, then the bands
+// between them, each worked on by improve_whole (meshers/quality_whole.hpp) in parallel, or taken
+// from a PieceCache when its input and field were seen before.
+#include "meshers/quality.hpp"
+
+#include "meshers/piece_cache.hpp"
+#include "meshers/quality_whole.hpp"
+#include "meshers/relax.hpp"
+#include "meshers/submesh.hpp"
+#include "runtime/subtree_hash.hpp"
+
+#include <tbb/parallel_for.h>
+
+#include <algorithm>
+#include <atomic>
+#include <bit>
+#include <chrono>
+#include <cmath>
+#include <limits>
+#include <memory>
+#include <vector>
+
+namespace ht {
+namespace {
+
+constexpr int kBandRings = 3;             // rings around the triangles between slabs, reworked after
+constexpr std::size_t kMaxSlabs = 4096;   // past this many, slabs get thicker (a whole multiple)
+constexpr std::uint64_t kPieceVersion = 1;  // of what a cached piece holds and how its key is made
+
+// A slab's or band's result, as a PieceCache keeps it.
+struct QualityPiece {
+  TriangleMesh mesh;
+  std::vector<std::uint32_t> origin;  // per vertex: its index in the piece's input, ~0u for a new one
+  QualityStats stats;
+};
+
+// Each vertex's slab across the mesh's longest axis: slab k holds [k d, (k + 1) d) for the
+// thickness d = kSlabCells h, numbered from the lowest one used. Where the slabs lie depends on h
+// alone, so an edit elsewhere does not move them.
+std::vector<std::uint32_t> slabs(const TriangleMesh& mesh, double h, std::size_t& count) {
+  glm::dvec3 lo(std::numeric_limits<double>::max()), hi(-std::numeric_limits<double>::max());
+  for (const glm::dvec3& p : mesh.positions) lo = glm::min(lo, p), hi = glm::max(hi, p);
+  const glm::dvec3 size = hi - lo;
+  const int axis = size.x >= size.y && size.x >= size.z ? 0 : size.y >= size.z ? 1 : 2;
+  double d = kSlabCells * h;
+  const double span = std::floor(hi[axis] / d) - std::floor(lo[axis] / d) + 1.0;
+  if (!(span <= double(kMaxSlabs))) d *= std::ceil(span / double(kMaxSlabs));
+  const double first = std::floor(lo[axis] / d);
+  std::vector<std::uint32_t> slab(mesh.positions.size());
+  count = 1;
+  for (std::size_t v = 0; v < slab.size(); ++v) {
+    const double k = std::floor(mesh.positions[v][axis] / d) - first;
+    slab[v] = std::uint32_t(std::clamp(k, 0.0, double(kMaxSlabs)));
+    count = std::max<std::size_t>(count, slab[v] + 1);
+  }
+  return slab;
+}
+
+std::uint64_t mix_double(std::uint64_t k, double v) { return hash_mix(k, std::bit_cast<std::uint64_t>(v)); }
+
+// The hash of everything a piece's work reads but the field: its input mesh, flags and options.
+std::uint64_t piece_key(const TriangleMesh& in, std::span<const std::uint8_t> keep, std::span<const std::uint8_t> crease,
+                        double T, double h, const QualityOptions& o) {
+  std::uint64_t k = hash_mix(0x5175616c50696563ull, kPieceVersion);  // "QualPiec"
+  k = mix_double(mix_double(k, T), h);
+  k = hash_mix(hash_mix(hash_mix(k, o.enabled), std::uint64_t(o.iterations)), std::uint64_t(o.newton_steps));
+  k = hash_bytes(k, in.positions.data(), in.positions.size() * sizeof(glm::dvec3));
+  k = hash_bytes(k, in.triangles.data(), in.triangles.size() * sizeof(glm::uvec3));
+  k = hash_bytes(k, keep.data(), keep.size());
+  return hash_bytes(k, crease.data(), crease.size());
+}
+
+Aabb bounds(const TriangleMesh& m) {
+  Aabb b;
+  for (const glm::dvec3& p : m.positions) b.grow(p);
+  return b;
+}
+
+// improve_whole on one piece, or its result from the cache. `origin` receives the piece's local
+// indices (~0u for new vertices).
+void improve_or_reuse(const TriangleMesh& in, std::span<const std::uint8_t> keep, std::span<const std::uint8_t> crease,
+                      const BatchField& field, double T, double h, const QualityOptions& options,
+                      const QualityReuse* reuse, TriangleMesh& out, std::vector<std::uint32_t>& origin,
+                      QualityStats& st) {
+  QualityReuse::Scope scope;
+  std::uint64_t key = 0;
+  if (reuse && reuse->cache && reuse->scope) {
+    // Work evaluates the field near the piece: where its vertices move and edges split.
+    scope = reuse->scope(bounds(in).expanded(2.0 * h));
+    if (scope.key != 0) {
+      key = hash_mix(piece_key(in, keep, crease, T, h, options), scope.key);
+      if (const auto hit = reuse->cache->find<QualityPiece>(key)) {
+        out = hit->mesh;
+        origin = hit->origin;
+        st = hit->stats;
+        ++st.pieces_reused;
+        return;
+      }
+    }
+  }
+  out = in;
+  if (key == 0) {
+    improve_whole(out, keep, crease, field, T, h, options, st, origin);
+    return;
+  }
+  // The piece may be kept only if every evaluation fell where the scope's key speaks for the field.
+  std::atomic<bool> escaped{false};
+  const BatchField guarded = [&](std::span<const glm::dvec3> p, std::span<double> v) {
+    if (!escaped.load(std::memory_order_relaxed))
+      for (const glm::dvec3& q : p)
+        if (!scope.covers(q)) {
+          escaped.store(true, std::memory_order_relaxed);
+          break;
+        }
+    field(p, v);
+  };
+  improve_whole(out, keep, crease, guarded, T, h, options, st, origin);
+  if (escaped.load()) return;
+  auto piece = std::make_shared<QualityPiece>(QualityPiece{out, origin, st});
+  const std::size_t bytes = 128 + 24 * out.positions.size() + 12 * out.triangles.size() + 4 * origin.size();
+  reuse->cache->insert<QualityPiece>(key, std::move(piece), bytes);
+}
+
+// Each part improved on its own, in parallel, its rim locked; put back in part order.
+// renumber[v] receives each old vertex's new index, ~0u for the collapsed.
+void improve_pieces(TriangleMesh& mesh, const Pieces& pieces, std::span<const std::uint8_t> locked,
+                    std::span<const std::uint8_t> crease, const BatchField& field, double T, double h,
+                    const QualityOptions& options, const QualityReuse* reuse, QualityStats& st,
+                    std::vector<std::uint32_t>& renumber) {
+  const std::size_t n = pieces.parts.size();
+  std::vector<TriangleMesh> changed(n);
+  std::vector<std::vector<std::uint32_t>> origin(n);
+  std::vector<QualityStats> part_stats(n);
+  tbb::parallel_for(std::size_t(0), n, [&](std::size_t i) {
+    const Submesh& sub = pieces.parts[i];
+    if (sub.mesh.triangles.empty()) return;  // a slab no vertex lies in
+    std::vector<std::uint8_t> keep(sub.origin.size()), on_crease(crease.empty() ? 0 : sub.origin.size());
+    for (std::size_t v = 0; v < keep.size(); ++v) keep[v] = sub.rim[v] || (!locked.empty() && locked[sub.origin[v]]);
+    for (std::size_t v = 0; v < on_crease.size(); ++v) on_crease[v] = crease[sub.origin[v]];
+    improve_or_reuse(sub.mesh, keep, on_crease, field, T, h, options, reuse, changed[i], origin[i], part_stats[i]);
+    ++part_stats[i].pieces;
+    for (std::uint32_t& o : origin[i])
+      if (o != ~0u) o = sub.origin[o];
+  });
+  for (const QualityStats& p : part_stats) {
+    st.collapses += p.collapses, st.flips += p.flips, st.splits += p.splits;
+    st.moved += p.moved, st.reverted += p.reverted, st.skipped |= p.skipped;
+    st.pieces += p.pieces, st.pieces_reused += p.pieces_reused;
+  }
+  put_back(mesh, pieces, changed, origin, &renumber);
+}
+
+}  // namespace
+
+void improve_quality(TriangleMesh& mesh, std::span<const std::uint8_t> locked, std::span<const std::uint8_t> crease,
+                     const BatchField& field, double threshold, double h, const QualityOptions& options,
+                     QualityStats* stats, std::vector<std::uint8_t>* crease_after, const QualityReuse* reuse) {
+  const auto t0 = std::chrono::steady_clock::now();
+  QualityStats st;
+  if (crease_after) crease_after->assign(crease.begin(), crease.end());
+  if (options.enabled && !mesh.triangles.empty()) {
+    // Slabs first, in parallel, their rims locked; then the band of triangles between slabs.
+    std::size_t count = 1;
+    const std::vector<std::uint32_t> slab = slabs(mesh, h, count);
+    std::vector<std::uint32_t> piece_of(mesh.triangles.size());
+    for (std::size_t t = 0; t < piece_of.size(); ++t) {
+      const glm::uvec3 tri = mesh.triangles[t];
+      piece_of[t] = slab[tri[0]] == slab[tri[1]] && slab[tri[0]] == slab[tri[2]] ? slab[tri[0]] : ~0u;
+    }
+    const Pieces pieces = take_pieces(mesh, std::move(piece_of), count);
+    std::vector<std::uint8_t> band(mesh.positions.size(), 0);
+    for (const glm::uvec3& t : pieces.rest) band[t[0]] = band[t[1]] = band[t[2]] = 1;
+    std::vector<std::uint32_t> renumber;
+    improve_pieces(mesh, pieces, locked, crease, field, threshold, h, options, reuse, st, renumber);
+    // The band's vertices were rims, locked: they survive, under new indices.
+    auto moved = [&](std::span<const std::uint8_t> flags) {
+      std::vector<std::uint8_t> out(mesh.positions.size(), 0);
+      if (!flags.empty())
+        for (std::size_t v = 0; v < renumber.size(); ++v)
+          if (renumber[v] != ~0u) out[renumber[v]] = flags[v];
+      return out;
+    };
+    if (crease_after && !crease.empty()) *crease_after = moved(crease);
+    if (!pieces.rest.empty()) {
+      // Three rings around it: the slabs' rims and their neighbours did not move, nor will a
+      // region's rim and its neighbours.
+      std::vector<std::uint8_t> region = moved(band);
+      const std::vector<std::uint8_t> any(region.size(), 1), around = rings_around(mesh, region, any, kBandRings);
+      for (std::size_t v = 0; v < region.size(); ++v) region[v] |= around[v];
+      const std::vector<std::uint8_t> locked2 = moved(locked), crease2 = moved(crease);
+      improve_pieces(mesh, take_region(mesh, region, true), locked2, crease2, field, threshold, h, options, reuse, st,
+                     renumber);
+      if (crease_after && !crease.empty()) *crease_after = moved(crease2);
+    }
+  }
+  st.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  if (stats) *stats = st;
+}
+
+}  // namespace ht
