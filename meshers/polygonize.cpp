@@ -284,7 +284,10 @@ void quality_phase(SurfaceField& field, RootField& root_field, double h, const Q
   }
   std::vector<std::uint8_t> crease_after;
   improve_quality(mesh, keep, on_crease, on_bricks, T, h, options, &stats.quality, &crease_after, reuse);
-  auto left = find_self_intersections(mesh, std::numeric_limits<std::size_t>::max()).examples;
+  // With a cache, the regions of the mesh found clean by an earlier run are not searched again.
+  const bool clean = reuse && brick::clean_by_regions(mesh, kSlabCells * h, *reuse->cache);
+  auto left = clean ? std::vector<std::array<std::uint32_t, 2>>{}
+                    : find_self_intersections(mesh, std::numeric_limits<std::size_t>::max()).examples;
   stats.quality_intersections = stats.crease_intersections = left.size();
   if (!left.empty()) resolve_folds(mesh, crease_after, root_field.get(), T, h, left, stats);
 }
@@ -543,11 +546,7 @@ TriangleMesh polygonize(std::shared_ptr<const Graph> graph, NodeId root, double 
   if (options.quality.enabled && !options.brick_filter && !clipped) {
     SurfaceField field(graph, root, T, grid.origin, kCells * h);
     for (std::size_t a = 0; a < active.size(); ++a) field.adopt(grid.brick_at(active[a]), tapes[a]);
-    QualityReuse reuse;
-    if (!keys.empty()) {
-      reuse.cache = options.pieces;
-      reuse.scope = [&view](const Aabb& box) { return brick::field_scope(view, box); };
-    }
+    const QualityReuse reuse = keys.empty() ? QualityReuse{} : brick::quality_reuse(view, *options.pieces);
     quality_phase(field, root_field, h, options.quality, budget, mesh, on_crease, keys.empty() ? nullptr : &reuse, stats);
   }
   if (options.progress) options.progress(1.0);

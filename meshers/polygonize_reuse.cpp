@@ -1,12 +1,16 @@
 #include "meshers/polygonize_reuse.hpp"
 
+#include "meshers/piece_cache.hpp"
+#include "meshers/self_intersections.hpp"
 #include "runtime/subtree_hash.hpp"
 
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <atomic>
 #include <bit>
 #include <cmath>
+#include <limits>
 #include <unordered_map>
 
 namespace ht::brick {
@@ -75,38 +79,92 @@ std::uint64_t brick_key(const BrickView& view, glm::ivec3 b, double T, const Pol
   return k;
 }
 
-QualityReuse::Scope field_scope(const BrickView& view, const Aabb& box) {
+QualityReuse quality_reuse(const BrickView& view, PieceCache& cache) {
   const Grid& grid = *view.grid;
-  const glm::dvec3 dlo = brick_of(grid, box.lo), dhi = brick_of(grid, box.hi);
-  QualityReuse::Scope scope;
-  // A box past the grid or over very many bricks is not worth keying (nothing is kept).
-  const glm::dvec3 span = dhi - dlo + 1.0;
-  if (!(span.x * span.y * span.z <= 1e6) || !in_grid(grid, glm::ivec3(dlo)) || !in_grid(grid, glm::ivec3(dhi))) return scope;
-  const glm::ivec3 lo(dlo), hi(dhi);
-  std::uint64_t k = hash_mix(0x53636f7065000000ull, 1);  // "Scope"
-  for (int z = lo.z; z <= hi.z; ++z)
-    for (int y = lo.y; y <= hi.y; ++y)
-      for (int x = lo.x; x <= hi.x; ++x) {
-        const std::size_t i = grid.brick_index({x, y, z});
-        const bool active = (*view.state)[i] == kActive && (*view.slot)[i] != kNone;
-        k = hash_mix(k, active ? view.tape_hash[(*view.slot)[i]] : 0x5a);
-      }
-  // The field is the same wherever the bricks are: their place is the box's, which the piece's
-  // input (its positions) already fixes; the grid's origin and cell are hashed for the lattice.
-  for (int i = 0; i < 3; ++i) k = hash_mix(hash_mix(mix_double(k, grid.origin[i]), std::uint64_t(lo[i])), std::uint64_t(hi[i]));
-  scope.key = mix_double(k, grid.h);
-  scope.covers = [&view, lo, hi](const glm::dvec3& p) {
+  QualityReuse r;
+  r.cache = &cache;
+  std::uint64_t k = hash_mix(0x4772696450617274ull, kBrickVersion);  // "GridPart"
+  for (int i = 0; i < 3; ++i) k = hash_mix(mix_double(k, grid.origin[i]), std::uint64_t(grid.bricks[i]));
+  r.context = mix_double(k, grid.h);
+  r.part_of = [&view](const glm::dvec3& p) {
     const Grid& g = *view.grid;
     const glm::dvec3 c = brick_of(g, p);
-    if (!(c.x >= lo.x && c.y >= lo.y && c.z >= lo.z && c.x <= hi.x && c.y <= hi.y && c.z <= hi.z)) return false;
+    if (!(c.x >= 0 && c.y >= 0 && c.z >= 0 && c.x < g.bricks.x && c.y < g.bricks.y && c.z < g.bricks.z))
+      return QualityReuse::kNoPart;
     const std::size_t i = g.brick_index(glm::ivec3(c));
-    return (*view.state)[i] == kActive && (*view.slot)[i] != kNone;
+    const bool active = (*view.state)[i] == kActive && (*view.slot)[i] != kNone;
+    return active ? std::uint64_t(i) : QualityReuse::kNoPart;
   };
-  return scope;
+  r.part_key = [&view](std::uint64_t part) {
+    const std::uint32_t s = part < view.slot->size() ? (*view.slot)[part] : kNone;
+    return s == kNone ? QualityReuse::kNoPart : view.tape_hash[s];
+  };
+  return r;
 }
 
 std::size_t kept_bytes(const KeptBrick& k) {
   return 96 + k.out.vertices.size() * sizeof(EdgeVertex) + k.out.triangles.size() * sizeof(k.out.triangles[0]);
+}
+
+namespace {
+
+// A region's triangles as a mesh of their own: vertices numbered in increasing global order.
+TriangleMesh region_mesh(const TriangleMesh& mesh, const std::vector<std::uint32_t>& triangles) {
+  std::vector<std::uint32_t> used;
+  used.reserve(3 * triangles.size());
+  for (const std::uint32_t t : triangles)
+    for (int k = 0; k < 3; ++k) used.push_back(mesh.triangles[t][k]);
+  std::sort(used.begin(), used.end());
+  used.erase(std::unique(used.begin(), used.end()), used.end());
+  TriangleMesh out;
+  out.positions.reserve(used.size());
+  for (const std::uint32_t v : used) out.positions.push_back(mesh.positions[v]);
+  out.triangles.reserve(triangles.size());
+  auto local = [&](std::uint32_t v) { return std::uint32_t(std::lower_bound(used.begin(), used.end(), v) - used.begin()); };
+  for (const std::uint32_t t : triangles)
+    out.triangles.push_back({local(mesh.triangles[t][0]), local(mesh.triangles[t][1]), local(mesh.triangles[t][2])});
+  return out;
+}
+
+// What a PieceCache keeps of a region found clean: nothing but the fact.
+struct CleanRegion {};
+
+}  // namespace
+
+bool clean_by_regions(const TriangleMesh& mesh, double thickness, PieceCache& cache) {
+  if (mesh.triangles.empty()) return true;
+  glm::dvec3 lo(std::numeric_limits<double>::max()), hi(-std::numeric_limits<double>::max());
+  for (const glm::dvec3& p : mesh.positions) lo = glm::min(lo, p), hi = glm::max(hi, p);
+  const glm::dvec3 size = hi - lo;
+  const int axis = size.x >= size.y && size.x >= size.z ? 0 : size.y >= size.z ? 1 : 2;
+  const double first = std::floor(lo[axis] / thickness), last = std::floor(hi[axis] / thickness);
+  if (!(last - first < 4096.0)) return false;  // too many regions to be worth it: the caller checks it all
+  // Region k: the triangles whose boxes meet slab k. Two triangles that meet share a point,
+  // which lies in some slab, so both are in that slab's region.
+  std::vector<std::vector<std::uint32_t>> regions(std::size_t(last - first) + 1);
+  for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t) {
+    double a = std::numeric_limits<double>::max(), b = -a;
+    for (int k = 0; k < 3; ++k) {
+      const double x = mesh.positions[mesh.triangles[t][k]][axis];
+      a = std::min(a, x), b = std::max(b, x);
+    }
+    for (double k = std::floor(a / thickness); k <= std::floor(b / thickness); ++k) regions[std::size_t(k - first)].push_back(t);
+  }
+  std::atomic<bool> clean{true};
+  tbb::parallel_for(std::size_t(0), regions.size(), [&](std::size_t r) {
+    if (regions[r].empty() || !clean.load(std::memory_order_relaxed)) return;
+    const TriangleMesh sub = region_mesh(mesh, regions[r]);
+    std::uint64_t key = hash_mix(0x436c65616e526567ull, kBrickVersion);  // "CleanReg"
+    key = hash_bytes(key, sub.positions.data(), sub.positions.size() * sizeof(glm::dvec3));
+    key = hash_bytes(key, sub.triangles.data(), sub.triangles.size() * sizeof(glm::uvec3));
+    if (cache.find<CleanRegion>(key)) return;
+    if (find_self_intersections(sub, 0).pairs != 0) {
+      clean = false;
+      return;
+    }
+    cache.insert<CleanRegion>(key, std::make_shared<const CleanRegion>(), 64);
+  });
+  return clean.load();
 }
 
 }  // namespace ht::brick

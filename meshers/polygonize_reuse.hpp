@@ -8,8 +8,8 @@
 // a brick whose key is in the PieceCache has the same output as when it is extracted, and is not
 // sampled or extracted again.
 //
-// The quality pass's pieces are keyed the same way through QualityReuse::Scope: the tapes of the
-// active bricks over a box, and a test that a point lies in one of them.
+// The quality pass's pieces (meshers/quality.hpp QualityReuse) see the field as these bricks:
+// a piece is taken again when the bricks it evaluated the field in still have the same tapes.
 #pragma once
 
 #include "meshers/brick_extract.hpp"
@@ -20,6 +20,10 @@
 #include <cstdint>
 #include <memory>
 #include <vector>
+
+namespace ht {
+class PieceCache;
+}
 
 namespace ht::brick {
 
@@ -44,8 +48,18 @@ std::vector<std::uint64_t> tape_hashes(const std::vector<std::shared_ptr<const T
 /// The key of active brick `b`'s extraction with these options and threshold.
 std::uint64_t brick_key(const BrickView& view, glm::ivec3 b, double T, const PolygonizeOptions& options);
 
-/// The field's scope over a box for the quality pass: the active bricks the box meets.
-QualityReuse::Scope field_scope(const BrickView& view, const Aabb& box);
+/// The quality pass's reuse over these bricks: parts are active bricks (their index), keyed by
+/// their tapes' hashes; points in other bricks have none; the grid is the context. Holds `view`
+/// and `cache` by reference.
+QualityReuse quality_reuse(const BrickView& view, PieceCache& cache);
+
+/// Whether `mesh` has no self-intersecting pair (meshers/self_intersections.hpp), told region by
+/// region: across the mesh's longest axis, slabs `thickness` thick at fixed places, each region
+/// the triangles whose boxes meet its slab (two triangles that meet share a point, which lies in
+/// some slab). A region found clean before, the same bit for bit, is not tested again; a region
+/// found clean now is kept. False when some region has a pair (then find them all over the
+/// mesh) or the regions would be too many.
+bool clean_by_regions(const TriangleMesh& mesh, double thickness, PieceCache& cache);
 
 /// The bytes a kept brick is charged in the cache.
 std::size_t kept_bytes(const KeptBrick& k);

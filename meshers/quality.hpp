@@ -57,18 +57,21 @@ inline constexpr double kSlabCells = 24.0;
 class PieceCache;
 
 /// What the pass may take from earlier runs (incremental re-meshing, meshers/piece_cache.hpp).
+/// The field is seen as parts of space (the polygonizer's bricks), each with a content key (its
+/// tape's hash). A slab or band is kept under a hash of its input and `context`, with the parts
+/// its work evaluated the field in and their keys; it is taken again when its input is the same
+/// and each of those parts still has the same key, since the work then evaluates the same field
+/// at the same points and makes the same result.
 struct QualityReuse {
   PieceCache* cache = nullptr;  ///< not owned; null: nothing is reused or kept
-  /// What the field is over a region: `key` hashes the tapes it evaluates there (0: nothing can
-  /// be said), `covers` the points where that holds.
-  struct Scope {
-    std::uint64_t key = 0;
-    std::function<bool(const glm::dvec3&)> covers;
-  };
-  /// The field's scope over a box; called from several threads at once. A slab or band is kept
-  /// under a hash of its input and its box's scope when every point the work evaluated the field
-  /// at was covered (so that the same input with the same key gives the same output).
-  std::function<Scope(const Aabb&)> scope;
+  /// Mixed into every key: what fixes the parts' places (the polygonizer's grid).
+  std::uint64_t context = 0;
+  /// The part a point's value comes from, or kNoPart when nothing can be said of it (then the
+  /// piece is not kept). Called from several threads at once.
+  std::function<std::uint64_t(const glm::dvec3&)> part_of;
+  /// The content key of a part now. Called from several threads at once.
+  std::function<std::uint64_t(std::uint64_t part)> part_key;
+  static constexpr std::uint64_t kNoPart = ~std::uint64_t(0);
 };
 
 struct QualityStats {
@@ -88,7 +91,8 @@ struct QualityStats {
 /// precision (world units). Vertex indices change; with `crease_after`, receives the crease flags
 /// renumbered with them.
 /// With `reuse`, slabs and bands whose input and field were seen before are taken from its cache
-/// (the result is the same, bit for bit) and the others are stored there.
+/// (the result is the same, bit for bit) and the others are stored there with the parts of the
+/// field they read.
 void improve_quality(TriangleMesh& mesh, std::span<const std::uint8_t> locked, std::span<const std::uint8_t> crease,
                      const BatchField& field, double threshold, double h, const QualityOptions& options = {},
                      QualityStats* stats = nullptr, std::vector<std::uint8_t>* crease_after = nullptr,

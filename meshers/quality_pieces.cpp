@@ -18,6 +18,8 @@
 #include <cmath>
 #include <limits>
 #include <memory>
+#include <mutex>
+#include <utility>
 #include <vector>
 
 namespace ht {
@@ -27,11 +29,13 @@ constexpr int kBandRings = 3;             // rings around the triangles between 
 constexpr std::size_t kMaxSlabs = 4096;   // past this many, slabs get thicker (a whole multiple)
 constexpr std::uint64_t kPieceVersion = 1;  // of what a cached piece holds and how its key is made
 
-// A slab's or band's result, as a PieceCache keeps it.
+// A slab's or band's result, as a PieceCache keeps it, with the parts of the field its work
+// read and their keys then.
 struct QualityPiece {
   TriangleMesh mesh;
   std::vector<std::uint32_t> origin;  // per vertex: its index in the piece's input, ~0u for a new one
   QualityStats stats;
+  std::vector<std::pair<std::uint64_t, std::uint64_t>> parts;  // (part, key), by part
 };
 
 // Each vertex's slab across the mesh's longest axis: slab k holds [k d, (k + 1) d) for the
@@ -70,10 +74,39 @@ std::uint64_t piece_key(const TriangleMesh& in, std::span<const std::uint8_t> ke
   return hash_bytes(k, crease.data(), crease.size());
 }
 
-Aabb bounds(const TriangleMesh& m) {
-  Aabb b;
-  for (const glm::dvec3& p : m.positions) b.grow(p);
-  return b;
+// The parts of the field a piece's work evaluated it in, recorded from any thread.
+class PartRecorder {
+ public:
+  explicit PartRecorder(const QualityReuse& reuse) : reuse_(reuse) {}
+  void add(std::span<const glm::dvec3> points) {
+    std::vector<std::uint64_t> local;
+    local.reserve(points.size());
+    for (const glm::dvec3& p : points) local.push_back(reuse_.part_of(p));
+    std::sort(local.begin(), local.end());
+    local.erase(std::unique(local.begin(), local.end()), local.end());
+    const std::lock_guard lock(mutex_);
+    parts_.insert(parts_.end(), local.begin(), local.end());
+  }
+  // The parts with their keys now, by part; false when some point had none.
+  bool take(std::vector<std::pair<std::uint64_t, std::uint64_t>>& out) {
+    std::sort(parts_.begin(), parts_.end());
+    parts_.erase(std::unique(parts_.begin(), parts_.end()), parts_.end());
+    if (!parts_.empty() && parts_.back() == QualityReuse::kNoPart) return false;
+    out.clear();
+    for (const std::uint64_t part : parts_) out.emplace_back(part, reuse_.part_key(part));
+    return true;
+  }
+
+ private:
+  const QualityReuse& reuse_;
+  std::mutex mutex_;
+  std::vector<std::uint64_t> parts_;
+};
+
+bool still_valid(const QualityPiece& piece, const QualityReuse& reuse) {
+  for (const auto& [part, key] : piece.parts)
+    if (reuse.part_key(part) != key) return false;
+  return true;
 }
 
 // improve_whole on one piece, or its result from the cache. `origin` receives the piece's local
@@ -82,42 +115,29 @@ void improve_or_reuse(const TriangleMesh& in, std::span<const std::uint8_t> keep
                       const BatchField& field, double T, double h, const QualityOptions& options,
                       const QualityReuse* reuse, TriangleMesh& out, std::vector<std::uint32_t>& origin,
                       QualityStats& st) {
-  QualityReuse::Scope scope;
-  std::uint64_t key = 0;
-  if (reuse && reuse->cache && reuse->scope) {
-    // Work evaluates the field near the piece: where its vertices move and edges split.
-    scope = reuse->scope(bounds(in).expanded(2.0 * h));
-    if (scope.key != 0) {
-      key = hash_mix(piece_key(in, keep, crease, T, h, options), scope.key);
-      if (const auto hit = reuse->cache->find<QualityPiece>(key)) {
-        out = hit->mesh;
-        origin = hit->origin;
-        st = hit->stats;
-        ++st.pieces_reused;
-        return;
-      }
-    }
-  }
   out = in;
-  if (key == 0) {
+  if (!reuse || !reuse->cache || !reuse->part_of || !reuse->part_key) {
     improve_whole(out, keep, crease, field, T, h, options, st, origin);
     return;
   }
-  // The piece may be kept only if every evaluation fell where the scope's key speaks for the field.
-  std::atomic<bool> escaped{false};
-  const BatchField guarded = [&](std::span<const glm::dvec3> p, std::span<double> v) {
-    if (!escaped.load(std::memory_order_relaxed))
-      for (const glm::dvec3& q : p)
-        if (!scope.covers(q)) {
-          escaped.store(true, std::memory_order_relaxed);
-          break;
-        }
+  const std::uint64_t key = hash_mix(piece_key(in, keep, crease, T, h, options), reuse->context);
+  if (const auto hit = reuse->cache->find<QualityPiece>(key); hit && still_valid(*hit, *reuse)) {
+    out = hit->mesh;
+    origin = hit->origin;
+    st = hit->stats;
+    ++st.pieces_reused;
+    return;
+  }
+  PartRecorder recorder(*reuse);
+  const BatchField recorded = [&](std::span<const glm::dvec3> p, std::span<double> v) {
+    recorder.add(p);
     field(p, v);
   };
-  improve_whole(out, keep, crease, guarded, T, h, options, st, origin);
-  if (escaped.load()) return;
-  auto piece = std::make_shared<QualityPiece>(QualityPiece{out, origin, st});
-  const std::size_t bytes = 128 + 24 * out.positions.size() + 12 * out.triangles.size() + 4 * origin.size();
+  improve_whole(out, keep, crease, recorded, T, h, options, st, origin);
+  auto piece = std::make_shared<QualityPiece>(QualityPiece{out, origin, st, {}});
+  if (!recorder.take(piece->parts)) return;
+  const std::size_t bytes = 128 + 24 * out.positions.size() + 12 * out.triangles.size() + 4 * origin.size() +
+                            16 * piece->parts.size();
   reuse->cache->insert<QualityPiece>(key, std::move(piece), bytes);
 }
 

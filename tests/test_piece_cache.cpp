@@ -138,9 +138,10 @@ TEST(PieceReuse, ATinyBoundStillGivesTheSameBytes) {
   check_edit(before, after, 0.15, 64 << 10);
 }
 
-// The quality pass keeps a piece only when every evaluation fell where its scope vouches for
-// the field, and a kept piece comes back identical.
-TEST(PieceReuse, QualityPiecesAreKeptOnlyWhereTheScopeCoversTheField) {
+// The quality pass keeps a piece only when every evaluation fell in a part of the field with a
+// key, takes it again only while those parts keep their keys, and a kept piece comes back
+// identical to running the pass.
+TEST(PieceReuse, QualityPiecesAreKeptWithThePartsOfTheFieldTheyRead) {
   Builder b(kT);
   const Tree t = b.build(b.point(dvec3(0), {1.0, 1.0}));
   PolygonizeOptions po;
@@ -151,28 +152,34 @@ TEST(PieceReuse, QualityPiecesAreKeptOnlyWhereTheScopeCoversTheField) {
   const BatchField field = [&](std::span<const dvec3> p, std::span<double> v) {
     for (std::size_t i = 0; i < p.size(); ++i) v[i] = reference_field(t.graph(), t.root(), kT, p[i]);
   };
-  auto run = [&](PieceCache& cache, bool covers, QualityStats& st) {
+  // Two parts: x < 0 and x >= 0; or none anywhere.
+  auto run = [&](PieceCache& cache, bool parts, std::uint64_t key_right, QualityStats& st) {
     QualityReuse reuse;
     reuse.cache = &cache;
-    reuse.scope = [covers](const Aabb&) {
-      return QualityReuse::Scope{42, [covers](const dvec3&) { return covers; }};
-    };
+    reuse.part_of = [parts](const dvec3& p) { return parts ? std::uint64_t(p.x >= 0.0) : QualityReuse::kNoPart; };
+    reuse.part_key = [key_right](std::uint64_t part) { return part == 1 ? key_right : 7; };
     TriangleMesh m = raw;
     improve_quality(m, {}, {}, field, kT, 0.08, {}, &st, nullptr, &reuse);
     return m;
   };
-  PieceCache nowhere(1 << 30), everywhere(1 << 30);
-  QualityStats a, b1, b2, plain;
-  run(nowhere, false, a);
+  PieceCache nowhere(1 << 30), cache(1 << 30);
+  QualityStats a, first_st, again_st, changed_st, plain_st;
+  run(nowhere, false, 1, a);
   EXPECT_EQ(nowhere.stats().entries, 0u);
-  const TriangleMesh first = run(everywhere, true, b1);
-  EXPECT_EQ(everywhere.stats().entries, b1.pieces);
-  const TriangleMesh second = run(everywhere, true, b2);
-  EXPECT_EQ(b2.pieces_reused, b2.pieces);
-  EXPECT_TRUE(test::same_bytes(first, second));
-  TriangleMesh m = raw;
-  improve_quality(m, {}, {}, field, kT, 0.08, {}, &plain);
-  EXPECT_TRUE(test::same_bytes(first, m));
+  const TriangleMesh first = run(cache, true, 1, first_st);
+  ASSERT_GT(first_st.pieces, 1u);  // slabs and bands
+  EXPECT_EQ(cache.stats().entries, first_st.pieces);
+  const TriangleMesh again = run(cache, true, 1, again_st);
+  EXPECT_EQ(again_st.pieces_reused, again_st.pieces);
+  // The right half's key changed: the pieces that read it run again, the others are kept.
+  const TriangleMesh changed = run(cache, true, 2, changed_st);
+  EXPECT_GT(changed_st.pieces_reused, 0u);
+  EXPECT_LT(changed_st.pieces_reused, changed_st.pieces);
+  TriangleMesh plain = raw;
+  improve_quality(plain, {}, {}, field, kT, 0.08, {}, &plain_st);
+  EXPECT_TRUE(test::same_bytes(first, plain));
+  EXPECT_TRUE(test::same_bytes(again, plain));
+  EXPECT_TRUE(test::same_bytes(changed, plain));
 }
 
 }  // namespace
