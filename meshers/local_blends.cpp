@@ -42,21 +42,22 @@ class BlendFields {
   BlendFields(const LocalInput& in, std::span<const NodeId> children) : eps(1e-3 * in.threshold) {
     for (NodeId child : children) fields.emplace_back(in, child, true);
   }
-  /// g_i - eps for operand i; eps - min_i g_i for i == size() (the patch's cut).
+  /// g_i - eps for operand i; eps - min_i g_i for i == size() (the patch's cut). Operand i's
+  /// cut reads the others only: its own field, often a mesh leaf's distance queries at each of
+  /// its vertices, is not evaluated.
   BatchField cut(std::size_t i) const {
     return [fields = fields, eps = eps, i](std::span<const glm::dvec3> points, std::span<double> values) {
       const std::size_t n = points.size();
-      std::vector<double> total(n, 0.0), largest(n, 0.0), own(n, 0.0), f(n);
+      std::vector<double> total(n, 0.0), largest(n, 0.0), f(n);
       for (std::size_t j = 0; j < fields.size(); ++j) {
+        if (j == i) continue;
         fields[j](points, f);
         for (std::size_t k = 0; k < n; ++k) {
           total[k] += std::abs(f[k]);
           largest[k] = std::max(largest[k], std::abs(f[k]));
-          if (j == i) own[k] = std::abs(f[k]);
         }
       }
-      for (std::size_t k = 0; k < n; ++k)
-        values[k] = i < fields.size() ? (total[k] - own[k]) - eps : eps - (total[k] - largest[k]);
+      for (std::size_t k = 0; k < n; ++k) values[k] = i < fields.size() ? total[k] - eps : eps - (total[k] - largest[k]);
     };
   }
   /// Where two operands' supports meet, widened by `margin`; `clip` receives their union.
