@@ -1,5 +1,6 @@
 #include "meshers/node_cache.hpp"
 
+#include "meshers/disk_cache.hpp"
 #include "runtime/subtree_hash.hpp"
 
 #include <bit>
@@ -52,18 +53,28 @@ std::size_t NodeCache::entry_bytes(const CachedJob& value) {
 }
 
 std::optional<CachedJob> NodeCache::find(std::uint64_t key) {
-  std::lock_guard lock(mutex_);
-  const auto it = index_.find(key);
-  if (it == index_.end()) {
+  {
+    std::lock_guard lock(mutex_);
+    const auto it = index_.find(key);
+    if (it != index_.end()) {
+      ++stats_.hits;
+      lru_.splice(lru_.begin(), lru_, it->second);
+      return it->second->value;
+    }
     ++stats_.misses;
-    return std::nullopt;
   }
-  ++stats_.hits;
-  lru_.splice(lru_.begin(), lru_, it->second);
-  return it->second->value;
+  if (!disk_) return std::nullopt;
+  std::optional<CachedJob> found = disk_->find(key);  // file I/O outside the lock
+  if (found) keep(key, *found);
+  return found;
 }
 
 void NodeCache::insert(std::uint64_t key, CachedJob value) {
+  if (disk_) disk_->store(key, value);
+  keep(key, std::move(value));
+}
+
+void NodeCache::keep(std::uint64_t key, CachedJob value) {
   const std::size_t bytes = entry_bytes(value);
   std::lock_guard lock(mutex_);
   if (const auto it = index_.find(key); it != index_.end()) {

@@ -8,6 +8,9 @@
 // the bound is not kept). Thread-safe: one mutex; find() and insert() may be called from any
 // job of any run at once. Meshes are shared, immutable (shared_ptr<const>): an evicted entry
 // stays alive while a run still holds it.
+//
+// Given a DiskCache (meshers/disk_cache.hpp), it is the first of two levels: a miss in memory
+// looks on disk (a hit there enters memory), and every insert is written through to disk.
 #pragma once
 
 #include "meshers/mesh_plan.hpp"
@@ -36,18 +39,25 @@ struct NodeCacheStats {
   std::size_t entries = 0, bytes = 0;
 };
 
+class DiskCache;
+
 class NodeCache {
  public:
-  explicit NodeCache(std::size_t max_bytes) : max_bytes_(max_bytes) {}
+  /// `disk`, when given, is the second level (not owned; it must outlive this cache).
+  explicit NodeCache(std::size_t max_bytes, DiskCache* disk = nullptr) : max_bytes_(max_bytes), disk_(disk) {}
   NodeCache(const NodeCache&) = delete;
   NodeCache& operator=(const NodeCache&) = delete;
 
-  /// The entry under `key`, now most recently used; counts a hit or a miss.
+  /// The entry under `key`, now most recently used; counts a hit or a miss (in memory). On a
+  /// miss, the disk level's entry if it has one, now in memory too (the disk counts that hit).
   std::optional<CachedJob> find(std::uint64_t key);
-  /// Stores (or refreshes) `key`, then evicts LRU entries until the bound holds.
+  /// Stores (or refreshes) `key`, then evicts LRU entries until the bound holds; writes it to
+  /// the disk level too (even an entry larger than the bound, which memory does not keep).
   void insert(std::uint64_t key, CachedJob value);
   NodeCacheStats stats() const;
   std::size_t max_bytes() const { return max_bytes_; }
+  DiskCache* disk() const { return disk_; }
+  /// Empties memory (not the disk level).
   void clear();
 
   /// The bytes an entry is charged.
@@ -59,9 +69,11 @@ class NodeCache {
     CachedJob value;
     std::size_t bytes;
   };
+  void keep(std::uint64_t key, CachedJob value);
   void evict_locked();
 
   std::size_t max_bytes_;
+  DiskCache* disk_;
   mutable std::mutex mutex_;
   std::list<Entry> lru_;  // front: most recently used
   std::unordered_map<std::uint64_t, std::list<Entry>::iterator> index_;
