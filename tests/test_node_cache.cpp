@@ -9,8 +9,6 @@
 
 #include <gtest/gtest.h>
 
-#include <cstring>
-
 using namespace ht;
 using glm::dvec3;
 
@@ -18,12 +16,7 @@ namespace {
 
 constexpr double kT = 0.5;
 
-bool same_bytes(const TriangleMesh& a, const TriangleMesh& b) {
-  // memcmp is not called on empty arrays (their data() may be null).
-  return a.positions.size() == b.positions.size() && a.triangles == b.triangles &&
-         (a.positions.empty() ||
-          std::memcmp(a.positions.data(), b.positions.data(), a.positions.size() * sizeof(dvec3)) == 0);
-}
+using test::same_bytes;
 
 bool reaches(const Graph& g, NodeId n, NodeId target) {
   if (n == target) return true;

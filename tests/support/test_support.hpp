@@ -22,9 +22,13 @@ std::filesystem::path shared_mesh(const std::string& name);
 std::filesystem::path temp_dir(const std::string& tag);
 /// Writes text to a file.
 void write_file(const std::filesystem::path& file, const std::string& text);
+/// A file's bytes (empty when it cannot be read).
+std::string read_file(const std::filesystem::path& file);
+/// The same vertex positions (bit for bit) and triangles.
+bool same_bytes(const TriangleMesh& a, const TriangleMesh& b);
 
 /// Runs the hybridtree CLI with `args` (shell words), stdin from `input`; returns exit code and
-/// the captured stdout and stderr.
+/// the captured stdout and stderr. Safe to call from several threads at once.
 struct CliResult {
   int code;
   std::string out, err;
