@@ -371,9 +371,9 @@ DiskCacheStats operator-(const DiskCacheStats& a, const DiskCacheStats& b) {
 DiskCache::DiskCache(fs::path dir, std::uint64_t max_bytes, Warn warn)
     : dir_(std::move(dir)), max_bytes_(max_bytes), warn_(std::move(warn)), nonce_(std::random_device{}()) {
   if (!warn_) warn_ = [](const std::string& line) { std::fprintf(stderr, "hybridtree: warning: %s\n", line.c_str()); };
-  std::error_code ec;
+  std::error_code ec, ec_dir;
   fs::create_directories(dir_, ec);
-  if (!fs::is_directory(dir_))
+  if (!fs::is_directory(dir_, ec_dir))
     throw DiskCacheError(dir_.string() + ": cannot make the cache folder" + (ec ? ": " + ec.message() : ""));
 }
 
@@ -383,12 +383,13 @@ std::optional<CachedJob> DiskCache::find(std::uint64_t key) {
   const fs::path file = file_of(key);
   std::string bytes, why;
   const ReadStatus status = read_file(file, bytes, why);
-  if (status == ReadStatus::Failed) ignore(file, {DiskIgnore::Unreadable, "unreadable: " + why});
-  if (status != ReadStatus::Ok) {
-    if (status == ReadStatus::Missing) {
-      std::lock_guard lock(mutex_);
-      ++stats_.misses;
-    }
+  if (status == ReadStatus::Missing) {
+    std::lock_guard lock(mutex_);
+    ++stats_.misses;
+    return std::nullopt;
+  }
+  if (status == ReadStatus::Failed) {
+    ignore(file, {DiskIgnore::Unreadable, "unreadable: " + why});
     return std::nullopt;
   }
   CacheEntryError error;
