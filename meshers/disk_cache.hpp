@@ -4,14 +4,15 @@
 //
 // One file per job key, DIR/<key as 16 lowercase hex digits>.htc, little-endian:
 //   header (48 bytes)  magic "HTcache\x1a", u32 layout version (kDiskCacheLayout), u32 zero,
-//                      u64 build digest (kDiskCacheBuild: the library's sources, compiler and
-//                      build type; any change to them makes every file stale), u64 key,
+//                      u64 build digest (kDiskCacheBuild: the library's sources, compiler,
+//                      build type and flags; any change to them makes every file stale), u64 key,
 //                      u64 payload bytes, u64 checksum (of the header's first 40 bytes and the
 //                      payload, runtime/subtree_hash.hpp hash_bytes)
 //   payload            u64 vertices V, u64 triangles T, V x 3 doubles (bit for bit), T x 3 u32,
 //                      then the NodeReport (strategy, reason, rho, fallback cause, the
 //                      polygonizer's and the local strategy's statistics, edges split,
-//                      refinements), every number 8 bytes, strings as u64 length + bytes
+//                      refinements): numbers 8 bytes, flags and enums 1 byte, strings as u64
+//                      length + bytes, lists as u64 count + items
 //
 // Writes are atomic: each goes to a temporary file of its own in DIR (".tmp-PID-N-RANDOM.partial",
 // O_EXCL) and is renamed over the final name, so a reader sees the old file, the new one or none,
