@@ -113,6 +113,18 @@ nlohmann::json cache_json(const Graph& g, const MeshResult& r) {
   return {{"hits", reused.size()}, {"misses", r.nodes.size() - reused.size()}, {"reused_nodes", reused}};
 }
 
+nlohmann::json disk_json(const DiskCacheStats& s) {
+  nlohmann::json ignored = nlohmann::json::object();
+  for (std::size_t i = 0; i < kDiskIgnoreReasons; ++i)
+    if (s.ignored[i]) ignored[to_string(DiskIgnore(i))] = s.ignored[i];
+  return {{"hits", s.hits},
+          {"misses", s.misses},
+          {"written", s.written},
+          {"write_failures", s.write_failures},
+          {"evicted", s.evicted},
+          {"ignored", ignored}};
+}
+
 nlohmann::json checks_json(const MeshChecks& c) {
   return {{"closed", c.closed()},
           {"manifold", c.manifold()},
@@ -163,9 +175,15 @@ MeshRun run_mesh(const Tree& tree, const MeshRunOptions& o) {
   options.cache = o.cache;
   run.strategy = o.strategy.empty() ? scene_strategy(tree) : o.strategy;
   options.strategy = strategy_of(run.strategy);
+  DiskCache* disk = o.cache ? o.cache->disk() : nullptr;
+  const DiskCacheStats disk_before = disk ? disk->stats() : DiskCacheStats{};
   const auto t1 = clock::now();
   run.result = mesh_tree(tree, options);
   run.mesh_seconds = std::chrono::duration<double>(clock::now() - t1).count();
+  if (disk) {
+    disk->trim();
+    run.disk = disk->stats() - disk_before;
+  }
   const auto t2 = clock::now();
   const TriangleMesh& mesh = *run.result.mesh;
   run.checks = check_mesh(mesh);
@@ -199,6 +217,7 @@ std::string mesh_stats_json(const Tree& tree, const MeshRun& run, const std::str
   for (const NodeReport& e : run.result.nodes) nodes.push_back(node_json(tree.graph(), e));
   j["nodes"] = nodes;
   if (run.options.cache) j["cache"] = cache_json(tree.graph(), run.result);
+  if (run.disk) j["cache"]["disk"] = disk_json(*run.disk);
   j["triangles"] = c.triangles;
   j["vertices"] = c.vertices;
   j["checks"] = checks_json(c);

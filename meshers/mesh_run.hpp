@@ -5,12 +5,14 @@
 // scene meshed from C++, Python or the shell gives the same mesh and the same figures.
 #pragma once
 
+#include "meshers/disk_cache.hpp"
 #include "meshers/mesh_checks.hpp"
 #include "meshers/mesh_plan.hpp"
 #include "runtime/tree.hpp"
 
 #include <atomic>
 #include <functional>
+#include <optional>
 #include <string>
 
 namespace ht {
@@ -27,7 +29,9 @@ struct MeshRunOptions {
   bool quality = true;
   std::function<void(double)> progress;     ///< as MeshOptions::progress
   const std::atomic<bool>* cancel = nullptr;  ///< as MeshOptions::cancel
-  NodeCache* cache = nullptr;                 ///< as MeshOptions::cache (not owned)
+  /// As MeshOptions::cache (not owned). With a disk level (NodeCache::disk()), the run trims
+  /// the folder to its bound (DiskCache::trim) when it has meshed.
+  NodeCache* cache = nullptr;
 };
 
 struct MeshRun {
@@ -35,6 +39,7 @@ struct MeshRun {
   std::string strategy;      ///< "auto", "global" or "local"
   MeshResult result;         ///< the mesh (never null) and one report per job
   MeshChecks checks;         ///< of result.mesh, surface error included when it is not empty
+  std::optional<DiskCacheStats> disk;  ///< with a disk level: what this run counted there
   double mesh_seconds = 0.0, check_seconds = 0.0;
 };
 
@@ -49,7 +54,9 @@ std::string root_strategy(const MeshRun& run, NodeId root);
 /// The statistics as JSON text (2-space indent, ending in a newline), the document `hybridtree
 /// mesh --stats-json` writes: per node the strategy, why, triangles and seconds; the checks; the
 /// polygonizer's bricks, crease, snap and quality figures; seconds per stage; with a node cache,
-/// "cache": {"hits", "misses", "reused_nodes": [labels]} (jobs reused, jobs run). `output` and
+/// "cache": {"hits", "misses", "reused_nodes": [labels]} (jobs reused, jobs run), and with its
+/// disk level "disk": {"hits", "misses", "written", "write_failures", "evicted", "ignored":
+/// {reason: files}} (reasons as to_string(DiskIgnore), those that occurred). `output` and
 /// `write_seconds` are left out when `output` is empty (nothing was written yet).
 std::string mesh_stats_json(const Tree& tree, const MeshRun& run, const std::string& scene, double load_seconds,
                             const std::string& output = {}, double write_seconds = 0.0);

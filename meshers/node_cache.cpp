@@ -1,5 +1,6 @@
 #include "meshers/node_cache.hpp"
 
+#include "meshers/disk_cache.hpp"
 #include "runtime/subtree_hash.hpp"
 
 #include <bit>
@@ -52,12 +53,19 @@ std::size_t NodeCache::entry_bytes(const CachedJob& value) {
 }
 
 std::optional<CachedJob> NodeCache::find(std::uint64_t key) {
-  const auto hit = jobs_.find<CachedJob>(key);
-  if (!hit) return std::nullopt;
-  return *hit;
+  if (const auto hit = jobs_.find<CachedJob>(key)) return *hit;
+  if (!disk_) return std::nullopt;
+  std::optional<CachedJob> found = disk_->find(key);  // file I/O, no lock held
+  if (found) keep(key, *found);
+  return found;
 }
 
 void NodeCache::insert(std::uint64_t key, CachedJob value) {
+  if (disk_) disk_->store(key, value);
+  keep(key, std::move(value));
+}
+
+void NodeCache::keep(std::uint64_t key, CachedJob value) {
   const std::size_t bytes = entry_bytes(value);
   jobs_.insert<CachedJob>(key, std::make_shared<const CachedJob>(std::move(value)), bytes);
 }

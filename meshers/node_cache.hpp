@@ -9,6 +9,9 @@
 // entry larger than its half is not kept). Thread-safe: find() and insert() may be called from
 // any job of any run at once. Meshes are shared, immutable (shared_ptr<const>): an evicted entry
 // stays alive while a run still holds it.
+//
+// Given a DiskCache (meshers/disk_cache.hpp), it is the first of two levels: a miss in memory
+// looks on disk (a hit there enters memory), and every insert is written through to disk.
 #pragma once
 
 #include "meshers/mesh_plan.hpp"
@@ -33,21 +36,29 @@ struct CachedJob {
 /// Hits, misses, insertions, evictions, entries and bytes, as a PieceCache counts them.
 using NodeCacheStats = PieceCacheStats;
 
+class DiskCache;
+
 /// Job results in one least-recently-used store, parts of polygonizations in another.
 class NodeCache {
  public:
   /// Half of `max_bytes` holds job results, half the parts of polygonizations (pieces()).
-  explicit NodeCache(std::size_t max_bytes) : jobs_(max_bytes - max_bytes / 2), pieces_(max_bytes / 2) {}
+  /// `disk`, when given, is the job results' second level (not owned; it must outlive this cache).
+  explicit NodeCache(std::size_t max_bytes, DiskCache* disk = nullptr)
+      : jobs_(max_bytes - max_bytes / 2), pieces_(max_bytes / 2), disk_(disk) {}
   NodeCache(const NodeCache&) = delete;
   NodeCache& operator=(const NodeCache&) = delete;
 
-  /// The entry under `key`, now most recently used; counts a hit or a miss.
+  /// The entry under `key`, now most recently used; counts a hit or a miss (in memory). On a
+  /// miss, the disk level's entry if it has one, now in memory too (the disk counts that hit).
   std::optional<CachedJob> find(std::uint64_t key);
-  /// Stores (or refreshes) `key`, then evicts LRU entries until the bound holds.
+  /// Stores (or refreshes) `key`, then evicts LRU entries until the bound holds; writes it to
+  /// the disk level too (even an entry larger than the bound, which memory does not keep).
   void insert(std::uint64_t key, CachedJob value);
-  /// The job results' store (pieces() counts its own).
+  /// The job results' store, in memory (pieces() counts its own).
   NodeCacheStats stats() const { return jobs_.stats(); }
   std::size_t max_bytes() const { return jobs_.max_bytes() + pieces_.max_bytes(); }
+  DiskCache* disk() const { return disk_; }
+  /// Empties memory (not the disk level).
   void clear();
 
   /// The bytes an entry is charged.
@@ -60,7 +71,9 @@ class NodeCache {
   const PieceCache& pieces() const { return pieces_; }
 
  private:
+  void keep(std::uint64_t key, CachedJob value);  // into memory only
   PieceCache jobs_, pieces_;
+  DiskCache* disk_;
 };
 
 }  // namespace ht

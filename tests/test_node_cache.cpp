@@ -9,8 +9,6 @@
 
 #include <gtest/gtest.h>
 
-#include <cstring>
-
 using namespace ht;
 using glm::dvec3;
 

@@ -4,11 +4,13 @@
 //   hybridtree mesh SCENE -o OUT           a closed triangle mesh of the scene's surface
 //   hybridtree generate snake [--count N]  a procedural scene (JSON on stdout)
 // Exit codes: 0 success, 2 bad input (scene, points, arguments), 1 anything else.
+#include "meshers/disk_cache.hpp"
 #include "meshers/ffd.hpp"
 #include "meshers/mesh_checks.hpp"
 #include "meshers/mesh_io.hpp"
 #include "meshers/mesh_plan.hpp"
 #include "meshers/mesh_run.hpp"
+#include "meshers/node_cache.hpp"
 #include "meshers/polygonize.hpp"
 #include "nodes/mesh_leaf.hpp"
 #include "runtime/scene.hpp"
@@ -34,6 +36,7 @@
 #include <cstdio>
 #include <functional>
 #include <map>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -210,9 +213,14 @@ struct MeshArgs {
   std::string scene, out, strategy, stats_json;  // strategy: empty = the scene's
   std::string sharp = "on", quality = "on";
   double precision = 0.0, memory_gib = 4.0;
+  std::string cache;             // the on-disk node cache's folder; empty: none
+  double cache_mib = 1024.0;     // its bound
   int threads = 0;
   bool optimize = true;
 };
+
+// Bytes of the in-memory level in front of --cache: jobs of one run with identical subtrees.
+constexpr std::size_t kCliMemoryCache = std::size_t(256) << 20;
 
 // Ctrl-C asks the mesh plan to stop between jobs and bricks; it then throws MeshCancelled and
 // no file is written. (A lock-free atomic store is safe in a signal handler.)
@@ -246,6 +254,17 @@ int cmd_mesh(const MeshArgs& a) {
   options.quality = a.quality == "on";
   options.progress = progress_bar();
   options.cancel = &interrupted;
+  std::unique_ptr<ht::DiskCache> disk;
+  std::unique_ptr<ht::NodeCache> cache;
+  if (!a.cache.empty()) {
+    try {
+      disk = std::make_unique<ht::DiskCache>(a.cache, static_cast<std::uint64_t>(a.cache_mib * double(1u << 20)));
+    } catch (const ht::DiskCacheError& e) {
+      throw InputError(e.what());
+    }
+    cache = std::make_unique<ht::NodeCache>(kCliMemoryCache, disk.get());
+    options.cache = cache.get();
+  }
   std::signal(SIGINT, on_interrupt);
   ht::MeshRun run;
   try {
@@ -343,6 +362,14 @@ int main(int argc, char** argv) {
                        "on: collapse needles, flip and relax what the polygonizer extracts into well-shaped triangles "
                        "(default); off: keep the extracted triangles")
       ->check(CLI::IsMember({"on", "off"}));
+  mesh_cmd->add_option("--cache", mesh_args.cache,
+                       "Keep mesh jobs' results in folder DIR between runs (made if missing); unchanged subtrees "
+                       "are not meshed again")
+      ->type_name("DIR");
+  mesh_cmd->add_option("--cache-size", mesh_args.cache_mib,
+                       "MiB the --cache folder may hold after a run; least recently used files go first (default 1024)")
+      ->check(CLI::NonNegativeNumber)
+      ->type_name("MiB");
 
   ht::cli::RenderArgs render_args;
   auto* render = app.add_subcommand("render", "Draw a scene (meshed at its precision) or a closed mesh file into a PNG");

@@ -3,8 +3,9 @@
 #include <gtest/gtest.h>
 
 #include <array>
-#include <cstring>
+#include <atomic>
 #include <cstdio>
+#include <cstring>
 #include <exception>
 #include <fstream>
 #include <pthread.h>
@@ -40,21 +41,29 @@ void write_file(const std::filesystem::path& file, const std::string& text) {
   out << text;
 }
 
-static std::string slurp(const std::filesystem::path& file) {
+std::string read_file(const std::filesystem::path& file) {
   std::ifstream in(file, std::ios::binary);
   std::stringstream s;
   s << in.rdbuf();
   return s.str();
 }
 
+bool same_bytes(const TriangleMesh& a, const TriangleMesh& b) {
+  // memcmp is not called on empty arrays (their data() may be null).
+  return a.positions.size() == b.positions.size() && a.triangles == b.triangles &&
+         (a.positions.empty() ||
+          std::memcmp(a.positions.data(), b.positions.data(), a.positions.size() * sizeof(glm::dvec3)) == 0);
+}
+
 CliResult run_cli(const std::string& args, const std::string& input) {
-  auto dir = temp_dir("cli");
+  static std::atomic<int> calls{0};  // a folder per call: calls from several threads at once
+  auto dir = temp_dir("cli-" + std::to_string(calls++));
   write_file(dir / "stdin", input);
   std::string cmd = std::string("'") + HYBRIDTREE_CLI + "' " + args + " < '" + (dir / "stdin").string() +
                     "' > '" + (dir / "stdout").string() + "' 2> '" + (dir / "stderr").string() + "'";
   int status = std::system(cmd.c_str());
-  CliResult r{WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status), slurp(dir / "stdout"),
-              slurp(dir / "stderr")};
+  CliResult r{WIFEXITED(status) ? WEXITSTATUS(status) : 128 + WTERMSIG(status), read_file(dir / "stdout"),
+              read_file(dir / "stderr")};
   std::filesystem::remove_all(dir);
   return r;
 }
@@ -64,13 +73,6 @@ Rng seeded() {
   for (const char* s = ::testing::UnitTest::GetInstance()->current_test_info()->name(); *s; ++s)
     h = (h ^ static_cast<unsigned char>(*s)) * 1099511628211ull;
   return Rng(h);
-}
-
-bool same_bytes(const TriangleMesh& a, const TriangleMesh& b) {
-  // memcmp is not called on empty arrays (their data() may be null).
-  return a.positions.size() == b.positions.size() && a.triangles == b.triangles &&
-         (a.positions.empty() ||
-          std::memcmp(a.positions.data(), b.positions.data(), a.positions.size() * sizeof(glm::dvec3)) == 0);
 }
 
 MeshOptions mesh_options(double h, MeshStrategy s) {

@@ -22,9 +22,13 @@ std::filesystem::path shared_mesh(const std::string& name);
 std::filesystem::path temp_dir(const std::string& tag);
 /// Writes text to a file.
 void write_file(const std::filesystem::path& file, const std::string& text);
+/// A file's bytes (empty when it cannot be read).
+std::string read_file(const std::filesystem::path& file);
+/// The same vertex positions (bit for bit) and triangles.
+bool same_bytes(const TriangleMesh& a, const TriangleMesh& b);
 
 /// Runs the hybridtree CLI with `args` (shell words), stdin from `input`; returns exit code and
-/// the captured stdout and stderr.
+/// the captured stdout and stderr. Safe to call from several threads at once.
 struct CliResult {
   int code;
   std::string out, err;
@@ -47,9 +51,6 @@ void run_on_stack(std::size_t bytes, const std::function<void()>& fn);
 
 /// Mesh plan options at precision h with strategy s (meshers/mesh_plan.hpp).
 MeshOptions mesh_options(double h, MeshStrategy s = MeshStrategy::Auto);
-
-/// Whether two meshes are the same bit for bit: positions (doubles compared as bytes) and triangles.
-bool same_bytes(const TriangleMesh& a, const TriangleMesh& b);
 
 /// Deterministic random numbers: every property test seeds from its own name.
 using Rng = std::mt19937_64;
