@@ -54,7 +54,7 @@ std::vector<std::uint32_t> slabs(const TriangleMesh& mesh, double h, std::size_t
   count = 1;
   for (std::size_t v = 0; v < slab.size(); ++v) {
     const double k = std::floor(mesh.positions[v][axis] / d) - first;
-    slab[v] = std::uint32_t(std::clamp(k, 0.0, double(kMaxSlabs)));
+    slab[v] = std::uint32_t(k >= 0.0 ? std::min(k, double(kMaxSlabs)) : 0.0);  // NaN: slab 0
     count = std::max<std::size_t>(count, slab[v] + 1);
   }
   return slab;
