@@ -46,7 +46,8 @@ nlohmann::json node_json(const Graph& g, const NodeReport& e) {
                    {"reused", e.polygonize.bricks_reused}, {"points_evaluated", e.polygonize.points_evaluated}};
     n["quality"] = {{"collapses", e.polygonize.quality.collapses}, {"flips", e.polygonize.quality.flips},
                     {"moved", e.polygonize.quality.moved}, {"pieces", e.polygonize.quality.pieces},
-                    {"pieces_reused", e.polygonize.quality.pieces_reused}, {"seconds", e.polygonize.quality.seconds}};
+                    {"pieces_reused", e.polygonize.quality.pieces_reused}, {"retries", e.polygonize.quality.retries},
+                    {"seconds", e.polygonize.quality.seconds}};
   }
   if (e.strategy == JobStrategy::TrimBlend || e.strategy == JobStrategy::TrimBoolean ||
       e.strategy == JobStrategy::TrimCrop || e.strategy == JobStrategy::TrimLocalBlend)
@@ -92,15 +93,7 @@ PolygonizeStats total_polygonize(const MeshResult& r) {
     s.seconds_extract += p.seconds_extract;
     s.seconds_merge += p.seconds_merge;
     s.seconds_features += p.seconds_features;
-    s.quality.collapses += p.quality.collapses;
-    s.quality.flips += p.quality.flips;
-    s.quality.splits += p.quality.splits;
-    s.quality.moved += p.quality.moved;
-    s.quality.reverted += p.quality.reverted;
-    s.quality.pieces += p.quality.pieces;
-    s.quality.pieces_reused += p.quality.pieces_reused;
-    s.quality.skipped |= p.quality.skipped;
-    s.quality.seconds += p.quality.seconds;
+    s.quality += p.quality;
   }
   return s;
 }
@@ -237,6 +230,7 @@ std::string mesh_stats_json(const Tree& tree, const MeshRun& run, const std::str
   j["quality"] = {{"enabled", run.options.polygonize.quality.enabled}, {"collapses", stats.quality.collapses},
                   {"flips", stats.quality.flips},         {"splits", stats.quality.splits},
                   {"moved", stats.quality.moved},         {"reverted", stats.quality.reverted},
+                  {"retries", stats.quality.retries},
                   {"skipped", stats.quality.skipped}};
   j["seconds"] = {{"load", load_seconds},
                   {"classify", stats.seconds_classify},

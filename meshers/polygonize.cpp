@@ -50,6 +50,7 @@ using brick::kOutside;
 constexpr double kSnap = 0.01;     // of a grid edge: a vertex this near a grid point merges there
 constexpr int kUntangleRounds = 4;  // of sliding crease points where the feature step folded
 constexpr int kUnfoldRounds = 12;   // of collapsing the folds sliding left
+constexpr double kFoldLockCells = 2.0;  // around a fold the quality pass left, kept as extracted on its second run
 constexpr int kFoldTurns = 3;       // of collapsing, then relaxing, what stays folded
 
 double seconds_since(std::chrono::steady_clock::time_point t0) {
@@ -282,14 +283,39 @@ void quality_phase(SurfaceField& field, RootField& root_field, double h, const Q
     const std::vector<std::uint8_t> any(keep.size(), 1), near = rings_around(mesh, on_crease, any, 2);
     for (std::size_t v = 0; v < keep.size(); ++v) keep[v] |= near[v];
   }
+  const TriangleMesh extracted = mesh;
   std::vector<std::uint8_t> crease_after;
-  improve_quality(mesh, keep, on_crease, on_bricks, T, h, options, &stats.quality, &crease_after, reuse);
-  // With a cache, the regions of the mesh found clean by an earlier run are not searched again.
-  const bool clean = reuse && brick::clean_by_regions(mesh, kSlabCells * h, *reuse->cache);
-  auto left = clean ? std::vector<std::array<std::uint32_t, 2>>{}
-                    : find_self_intersections(mesh, std::numeric_limits<std::size_t>::max()).examples;
-  stats.quality_intersections = stats.crease_intersections = left.size();
-  if (!left.empty()) resolve_folds(mesh, crease_after, root_field.get(), T, h, left, stats);
+  auto improve = [&](const std::vector<std::uint8_t>& locked) {
+    QualityStats st;
+    improve_quality(mesh, locked, on_crease, on_bricks, T, h, options, &st, &crease_after, reuse);
+    stats.quality += st;
+    // With a cache, the regions of the mesh found clean by an earlier run are not searched again.
+    const bool clean = reuse && brick::clean_by_regions(mesh, kSlabCells * h, *reuse->cache);
+    auto left = clean ? std::vector<std::array<std::uint32_t, 2>>{}
+                      : find_self_intersections(mesh, std::numeric_limits<std::size_t>::max()).examples;
+    stats.quality_intersections += left.size();
+    stats.crease_intersections = left.size();
+    if (!left.empty()) resolve_folds(mesh, crease_after, root_field.get(), T, h, left, stats);
+    return left;
+  };
+  const auto left = improve(keep);
+  if (left.empty()) return;
+  // Where folds are left (two sheets closer than a cell, pushed through each other), the pass runs
+  // again from the extracted mesh with the vertices around them kept where extraction put them.
+  std::vector<Aabb> folds;
+  for (const auto& pair : left) {
+    Aabb box;
+    for (const std::uint32_t t : pair)
+      for (int k = 0; k < 3; ++k) box.grow(mesh.positions[mesh.triangles[t][k]]);
+    folds.push_back(box.expanded(kFoldLockCells * h));
+  }
+  mesh = extracted;
+  keep.resize(mesh.positions.size(), 0);
+  for (std::size_t v = 0; v < keep.size(); ++v)
+    for (const Aabb& box : folds)
+      if (box.contains(mesh.positions[v])) keep[v] = 1;
+  ++stats.quality.retries;
+  improve(keep);
 }
 
 }  // namespace

@@ -16,7 +16,9 @@
 //             a move that turns a triangle over or worsens its smallest angle much is undone.
 // Locked vertices (crease points, corners, exact seams, a mesh's boundary, triangles kept from
 // the user's meshes) neither move nor go away, and no edge between two of them is flipped or
-// collapsed, so creases stay sharp and open patches keep their rims.
+// collapsed, so creases stay sharp and open patches keep their rims. A component less than two
+// precisions across on every axis is locked whole: so few triangles fold into each other when
+// collapsed or relaxed, and there is nothing to gain.
 //
 // The mesh is cut into slabs across its longest axis, kSlabCells precisions thick, at fixed
 // places in space (multiples of the slab's thickness from the origin); the slabs are worked on in
@@ -79,8 +81,17 @@ struct QualityStats {
   std::size_t moved = 0;     ///< vertex moves kept over all relaxations
   std::size_t reverted = 0;  ///< vertex moves undone
   std::size_t pieces = 0, pieces_reused = 0;  ///< slabs and bands worked on, and of those taken from a QualityReuse
+  std::size_t retries = 0;   ///< runs again from the extracted mesh with the vertices around folds kept (meshers/polygonize.hpp)
   bool skipped = false;      ///< the mesh was not a manifold OpenMesh accepts; left as it was
   double seconds = 0.0;
+
+  QualityStats& operator+=(const QualityStats& o) {
+    collapses += o.collapses, flips += o.flips, splits += o.splits, moved += o.moved, reverted += o.reverted;
+    pieces += o.pieces, pieces_reused += o.pieces_reused, retries += o.retries;
+    skipped |= o.skipped;
+    seconds += o.seconds;
+    return *this;
+  }
 };
 
 /// Improves the triangles of `mesh` in place. `locked` and `crease` hold one flag per vertex (or

@@ -27,6 +27,7 @@ namespace {
 
 constexpr int kBandRings = 3;             // rings around the triangles between slabs, reworked after
 constexpr std::size_t kMaxSlabs = 4096;   // past this many, slabs get thicker (a whole multiple)
+constexpr double kSmallComponentCells = 2.0;  // components smaller than this many h across stay as they are
 constexpr std::uint64_t kPieceVersion = 1;  // of what a cached piece holds and how its key is made
 
 // A slab's or band's result, as a PieceCache keeps it, with the parts of the field its work
@@ -162,12 +163,41 @@ void improve_pieces(TriangleMesh& mesh, const Pieces& pieces, std::span<const st
     for (std::uint32_t& o : origin[i])
       if (o != ~0u) o = sub.origin[o];
   });
-  for (const QualityStats& p : part_stats) {
-    st.collapses += p.collapses, st.flips += p.flips, st.splits += p.splits;
-    st.moved += p.moved, st.reverted += p.reverted, st.skipped |= p.skipped;
-    st.pieces += p.pieces, st.pieces_reused += p.pieces_reused;
-  }
+  for (const QualityStats& p : part_stats) st += p;
   put_back(mesh, pieces, changed, origin, &renumber);
+}
+
+// `locked` with every vertex of a component less than kSmallComponentCells precisions across
+// added. Such a blob (a primitive about the size of a cell) has too few triangles to improve:
+// collapsing or relaxing them folds it into itself, so it stays as extracted.
+std::vector<std::uint8_t> lock_small_components(const TriangleMesh& mesh, std::span<const std::uint8_t> locked,
+                                                double h) {
+  const std::size_t n = mesh.positions.size();
+  std::vector<std::uint32_t> parent(n);
+  for (std::uint32_t v = 0; v < n; ++v) parent[v] = v;
+  auto root = [&](std::uint32_t v) {
+    while (parent[v] != v) v = parent[v] = parent[parent[v]];
+    return v;
+  };
+  for (const glm::uvec3& t : mesh.triangles) {
+    const std::uint32_t a = root(t[0]), b = root(t[1]), c = root(t[2]);
+    parent[b] = a;
+    parent[root(c)] = a;
+  }
+  std::vector<glm::dvec3> lo(n, glm::dvec3(std::numeric_limits<double>::max())), hi(n, -lo[0]);
+  for (std::uint32_t v = 0; v < n; ++v) {
+    const std::uint32_t r = root(v);
+    lo[r] = glm::min(lo[r], mesh.positions[v]);
+    hi[r] = glm::max(hi[r], mesh.positions[v]);
+  }
+  std::vector<std::uint8_t> out(n, 0);
+  if (!locked.empty()) std::copy(locked.begin(), locked.end(), out.begin());
+  const double small = kSmallComponentCells * h;
+  for (std::uint32_t v = 0; v < n; ++v) {
+    const glm::dvec3 size = hi[root(v)] - lo[root(v)];
+    if (size.x < small && size.y < small && size.z < small) out[v] = 1;
+  }
+  return out;
 }
 
 }  // namespace
@@ -191,6 +221,8 @@ void improve_quality(TriangleMesh& mesh, std::span<const std::uint8_t> locked, s
     std::vector<std::uint8_t> band(mesh.positions.size(), 0);
     for (const glm::uvec3& t : pieces.rest) band[t[0]] = band[t[1]] = band[t[2]] = 1;
     std::vector<std::uint32_t> renumber;
+    const std::vector<std::uint8_t> kept = lock_small_components(mesh, locked, h);
+    locked = kept;
     improve_pieces(mesh, pieces, locked, crease, field, threshold, h, options, reuse, st, renumber);
     // The band's vertices were rims, locked: they survive, under new indices.
     auto moved = [&](std::span<const std::uint8_t> flags) {
