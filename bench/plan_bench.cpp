@@ -53,11 +53,11 @@ NodeId bunny_with_sphere(Builder& b, const glm::dvec3& shift) {
   return b.blend({bunny, b.point(shift + glm::dvec3(-0.005, 0.5, -0.12), {0.12})});
 }
 
-// Args: strategy (0 auto, 1 global), threads. Precision 0.005.
+// Args: strategy (0 auto, 1 global), threads. Precision 0.005 (0.01 in quick mode).
 void BM_BunnyEarBlend(benchmark::State& state) {
   static Builder b(0.5);
   static const Tree tree = b.build(b.blend({b.mesh(leaf("bunny00.off"), {0.05}), b.point({-0.005, 0.5, -0.12}, {0.12})}));
-  run(state, tree, 0.005, state.range(0) ? MeshStrategy::Global : MeshStrategy::Auto, int(state.range(1)));
+  run(state, tree, bench::precision(0.005), state.range(0) ? MeshStrategy::Global : MeshStrategy::Auto, int(state.range(1)));
 }
 BENCHMARK(BM_BunnyEarBlend)->ArgsProduct({{0, 1}, {2}})->ArgNames({"global", "threads"})->UseRealTime()->Unit(benchmark::kMillisecond);
 
@@ -75,6 +75,11 @@ Tree winged_bunny(Builder& b) {
 void BM_WingedBunny(benchmark::State& state) {
   static Builder b(0.5);
   static const Tree tree = winged_bunny(b);
+  // The global run takes seconds: quick mode (2 cores, a minute for everything) skips it.
+  if (bench::quick_mode && state.range(0) != 0) {
+    state.SkipWithError("global: skipped in quick mode");
+    return;
+  }
   run(state, tree, 0.008, state.range(0) ? MeshStrategy::Global : MeshStrategy::Auto, int(state.range(1)));
   state.counters["paper_seconds"] = 70.0;
   state.counters["paper_triangles"] = 91961.0;
