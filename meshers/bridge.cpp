@@ -1,6 +1,7 @@
 #include "meshers/bridge.hpp"
 
 #include "meshers/edges.hpp"
+#include "meshers/union_find.hpp"
 
 #include <glm/geometric.hpp>
 #include <tbb/parallel_for.h>
@@ -137,6 +138,48 @@ std::vector<glm::dvec3> vertex_normals(const TriangleMesh& m) {
   return n;
 }
 
+double perimeter(const std::vector<glm::dvec3>& pos, const std::vector<std::uint32_t>& loop) {
+  double sum = 0.0;
+  for (std::size_t i = 0; i < loop.size(); ++i) sum += glm::length(pos[loop[(i + 1) % loop.size()]] - pos[loop[i]]);
+  return sum;
+}
+
+// The patch loops (indices into `loops`, whose vertices are the patch's plus `base`) that no
+// operand loop took, if each is shorter than `longest` and lies on a piece of the patch with
+// another loop (a hole, not the whole rim of an island); empty otherwise, and then the caller's
+// count check fails.
+std::vector<std::size_t> unfaced_specks(const std::vector<glm::dvec3>& pos, const TriangleMesh& patch, std::uint32_t base,
+                                        const std::vector<std::vector<std::uint32_t>>& loops,
+                                        const std::vector<std::uint32_t>& taken, double longest) {
+  UnionFind parts(patch.positions.size());
+  for (const glm::uvec3& t : patch.triangles) parts.unite(t[0], t[1]), parts.unite(t[0], t[2]);
+  std::unordered_map<std::uint32_t, std::size_t> loops_on;
+  for (const auto& l : loops) ++loops_on[parts.find(l[0] - base)];
+  std::vector<std::size_t> out;
+  for (std::size_t l = 0; l < loops.size(); ++l) {
+    if (taken[l]) continue;
+    if (!(perimeter(pos, loops[l]) <= longest) || loops_on[parts.find(loops[l][0] - base)] < 2) return {};
+    out.push_back(l);
+  }
+  return out;
+}
+
+// Closes a hole by a fan: one triangle for three edges, else around a new vertex at the loop's
+// centroid (the local strategies' remeshing of the patch moves it onto the surface). The new
+// triangles run against the loop, as the mesh's own run along it.
+void close_hole(TriangleMesh& m, const std::vector<std::uint32_t>& loop) {
+  const std::size_t n = loop.size();
+  if (n == 3) {
+    m.triangles.push_back({loop[0], loop[2], loop[1]});
+    return;
+  }
+  glm::dvec3 centre(0.0);
+  for (const std::uint32_t v : loop) centre += m.positions[v];
+  const auto c = static_cast<std::uint32_t>(m.positions.size());
+  m.positions.push_back(centre / double(n));
+  for (std::size_t i = 0; i < n; ++i) m.triangles.push_back({c, loop[(i + 1) % n], loop[i]});
+}
+
 }  // namespace
 
 std::vector<std::vector<std::uint32_t>> boundary_loops(const TriangleMesh& mesh) {
@@ -186,7 +229,18 @@ TriangleMesh pull_back_boundary(const TriangleMesh& mesh) {
     for (std::uint32_t v : pinched) pinch[v] = 1;
     out = without(out, pinch);
   }
-  return out;
+  // A piece that lost every interior vertex (a lone triangle whose neighbours all touched the
+  // boundary) is all rim: no seam faces it, so it goes too.
+  const std::vector<std::uint32_t> rim = boundary_next(out);
+  UnionFind parts(out.positions.size());
+  for (const glm::uvec3& t : out.triangles) parts.unite(t[0], t[1]), parts.unite(t[0], t[2]);
+  std::vector<std::uint8_t> inner(out.positions.size(), 0), drop_rim(out.positions.size(), 0);
+  bool any = false;
+  for (std::uint32_t v = 0; v < out.positions.size(); ++v)
+    if (rim[v] == kNo) inner[parts.find(v)] = 1;
+  for (std::uint32_t v = 0; v < out.positions.size(); ++v)
+    if (!inner[parts.find(v)]) drop_rim[v] = 1, any = true;
+  return any ? without(out, drop_rim) : out;
 }
 
 TriangleMesh bridge(std::span<const TriangleMesh* const> operands, const TriangleMesh& patch, double max_width,
@@ -201,8 +255,11 @@ TriangleMesh bridge(std::span<const TriangleMesh* const> operands, const Triangl
   auto patch_loops = boundary_loops(patch);
   for (auto& l : patch_loops)
     for (auto& v : l) v += base;
-  if (op_loops.size() != patch_loops.size())
-    throw BridgeError(std::to_string(op_loops.size()) + " operand loops face " + std::to_string(patch_loops.size()) + " patch loops");
+  const auto mismatch = [&] {
+    return BridgeError(std::to_string(op_loops.size()) + " operand loops face " + std::to_string(patch_loops.size()) +
+                       " patch loops");
+  };
+  if (op_loops.size() > patch_loops.size()) throw mismatch();
   const PatchIndex index(out.positions, patch_loops, max_width);
   // Each operand loop faces the patch loop most of its vertices are nearest to.
   std::vector<std::uint32_t> partner(op_loops.size(), kNo), taken(patch_loops.size(), 0);
@@ -222,6 +279,11 @@ TriangleMesh bridge(std::span<const TriangleMesh* const> operands, const Triangl
     if (index.find(out.positions[op_loops[l][0]]).loop != partner[l])
       throw BridgeError("an operand loop's first vertex faces another patch loop");
   }
+  // A patch loop no operand loop faces is a speck the cut left (where the operands' fields both
+  // dip under eps for a moment): closed, when small and a hole in a piece that has a seam.
+  const std::vector<std::size_t> specks = unfaced_specks(out.positions, patch, base, patch_loops, taken, 0.25 * max_width);
+  if (op_loops.size() + specks.size() != patch_loops.size()) throw mismatch();
+  for (const std::size_t l : specks) close_hole(out, patch_loops[l]);
   const std::vector<glm::dvec3> side = vertex_normals(out);
   std::vector<std::vector<glm::uvec3>> bands(op_loops.size());
   std::vector<double> widest(op_loops.size(), 0.0);
@@ -230,6 +292,7 @@ TriangleMesh bridge(std::span<const TriangleMesh* const> operands, const Triangl
   });
   BridgeStats st;
   st.loops = op_loops.size();
+  st.holes_closed = specks.size();
   for (std::size_t l = 0; l < bands.size(); ++l) {
     out.triangles.insert(out.triangles.end(), bands[l].begin(), bands[l].end());
     st.band_triangles += bands[l].size();

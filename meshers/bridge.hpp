@@ -7,7 +7,8 @@
 // stitching). Unlike welding two samplings of one curve, a band tolerates the patch's chords
 // deviating from the exact operand by more than its triangles' height.
 //
-// Every vertex of every piece is kept bit for bit; the band adds triangles only.
+// Every vertex of every piece is kept bit for bit; the band adds triangles only (and one vertex
+// for each speck of the cut it closes, below).
 #pragma once
 
 #include "meshers/triangle_mesh.hpp"
@@ -25,6 +26,7 @@ struct BridgeError : std::runtime_error {
 
 struct BridgeStats {
   std::size_t loops = 0;             ///< pairs of loops bridged
+  std::size_t holes_closed = 0;      ///< small patch loops that faced no operand loop, closed by a fan
   std::size_t band_triangles = 0;
   double widest = 0;                 ///< the longest band edge
 };
@@ -34,12 +36,16 @@ struct BridgeStats {
 std::vector<std::vector<std::uint32_t>> boundary_loops(const TriangleMesh& mesh);
 
 /// The mesh without the triangles that touch its boundary (one ring pulled back), unused
-/// vertices removed. A closed mesh is returned unchanged.
+/// vertices removed; then without the pieces left with no vertex off their boundary (a lone
+/// triangle whose neighbours all went). A closed mesh is returned unchanged.
 TriangleMesh pull_back_boundary(const TriangleMesh& mesh);
 
 /// Joins the operands' pieces and the patch: every boundary loop of an operand piece is bridged
-/// to the patch loop that faces it (each patch loop to exactly one operand loop). Throws
-/// BridgeError when the loops do not pair up or a band would be wider than `max_width`.
+/// to the patch loop that faces it (each patch loop to at most one operand loop). A patch loop
+/// that no operand loop faces, shorter than max_width / 4 and a hole in a piece with other
+/// loops, is a speck of the cut: it is closed by a fan (around a new vertex at its centroid when
+/// longer than three edges, which the caller puts on the surface). Throws BridgeError when the
+/// loops do not pair up so or a band would be wider than `max_width`.
 /// Parallel over loop pairs; deterministic.
 /// The result's vertices are the operands' in order, then the patch's: `patch_begin` (if given)
 /// receives the index of the patch's first vertex.

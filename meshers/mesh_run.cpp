@@ -60,6 +60,7 @@ nlohmann::json node_json(const Graph& g, const NodeReport& e) {
                   {"band_loops", e.local.bridge.loops},
                   {"band_triangles", e.local.bridge.band_triangles},
                   {"band_widest", e.local.bridge.widest},
+                  {"band_holes_closed", e.local.bridge.holes_closed},
                   {"self_intersections", e.local.self_intersections}};
   if (e.edges_split) n["edges_split"] = e.edges_split;
   return n;
