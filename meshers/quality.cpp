@@ -74,6 +74,7 @@ class Improver {
     st.collapses += merge_crease_points();
     for (int it = 0; it < o_.iterations; ++it) {
       st.splits += split();
+      st.collapses += remove_valence3();
       st.collapses += collapse();
       st.flips += flip();
       relax(st);
@@ -284,6 +285,36 @@ class Improver {
       }
       if (!best.is_valid()) continue;
       m_.collapse(best);
+      ++done;
+    }
+    return done;
+  }
+
+  // A vertex of valence 3 at the corner of a needle or a cap (one that sits almost on an edge of
+  // its neighbours' triangle) keeps its neighbours' needles from collapsing: each of their short
+  // edges has it as a third common neighbour, which OpenMesh's link check refuses. Removing it
+  // leaves its three neighbours' triangle, whichever edge collapses; that triangle must face the
+  // way the ring did and not be degenerate.
+  std::size_t remove_valence3() {
+    std::size_t done = 0;
+    const std::size_t n = m_.n_vertices();
+    for (std::size_t vi = 0; vi < n; ++vi) {
+      const VH v{int(vi)};
+      if (m_.status(v).deleted() || locked(v) || m_.is_boundary(v) || m_.valence(v) != 3) continue;
+      if (!(ring_thinness(v) > kNeedleCos)) continue;
+      // Collapsing v into `to` turns v's face without `to` into the triangle that stays.
+      const HH h = m_.halfedge_handle(v);
+      const VH to = m_.to_vertex_handle(h);
+      std::array<glm::dvec3, 3> q{};
+      for (const FH f : m_.vf_range(v)) {
+        const auto c = corners(f);
+        if (c[0] == to || c[1] == to || c[2] == to) continue;
+        for (int k = 0; k < 3; ++k) q[std::size_t(k)] = p(c[std::size_t(k)] == v ? to : c[std::size_t(k)]);
+      }
+      if (thinness(q[0], q[1], q[2]) > kNeedleCos || glm::dot(unit_normal(q[0], q[1], q[2]), ring_normal(v)) < kTurnCos)
+        continue;
+      if (!m_.is_collapse_ok(h)) continue;
+      m_.collapse(h);
       ++done;
     }
     return done;
