@@ -26,7 +26,6 @@ namespace ht {
 namespace {
 
 constexpr int kBandRings = 3;             // rings around the triangles between slabs, reworked after
-constexpr std::size_t kMaxSlabs = 4096;   // past this many, slabs get thicker (a whole multiple)
 constexpr double kSmallComponentCells = 2.0;  // components smaller than this many h across stay as they are
 constexpr std::uint64_t kPieceVersion = 1;  // of what a cached piece holds and how its key is made
 
@@ -38,28 +37,6 @@ struct QualityPiece {
   QualityStats stats;
   std::vector<std::pair<std::uint64_t, std::uint64_t>> parts;  // (part, key), by part
 };
-
-// Each vertex's slab across the mesh's longest axis: slab k holds [k d, (k + 1) d) for the
-// thickness d = kSlabCells h, numbered from the lowest one used. Where the slabs lie depends on h
-// alone, so an edit elsewhere does not move them.
-std::vector<std::uint32_t> slabs(const TriangleMesh& mesh, double h, std::size_t& count) {
-  glm::dvec3 lo(std::numeric_limits<double>::max()), hi(-std::numeric_limits<double>::max());
-  for (const glm::dvec3& p : mesh.positions) lo = glm::min(lo, p), hi = glm::max(hi, p);
-  const glm::dvec3 size = hi - lo;
-  const int axis = size.x >= size.y && size.x >= size.z ? 0 : size.y >= size.z ? 1 : 2;
-  double d = kSlabCells * h;
-  const double span = std::floor(hi[axis] / d) - std::floor(lo[axis] / d) + 1.0;
-  if (!(span <= double(kMaxSlabs))) d *= std::ceil(span / double(kMaxSlabs));
-  const double first = std::floor(lo[axis] / d);
-  std::vector<std::uint32_t> slab(mesh.positions.size());
-  count = 1;
-  for (std::size_t v = 0; v < slab.size(); ++v) {
-    const double k = std::floor(mesh.positions[v][axis] / d) - first;
-    slab[v] = std::uint32_t(k >= 0.0 ? std::min(k, double(kMaxSlabs)) : 0.0);  // NaN: slab 0
-    count = std::max<std::size_t>(count, slab[v] + 1);
-  }
-  return slab;
-}
 
 std::uint64_t mix_double(std::uint64_t k, double v) { return hash_mix(k, std::bit_cast<std::uint64_t>(v)); }
 
@@ -211,7 +188,7 @@ void improve_quality(TriangleMesh& mesh, std::span<const std::uint8_t> locked, s
   if (options.enabled && !mesh.triangles.empty()) {
     // Slabs first, in parallel, their rims locked; then the band of triangles between slabs.
     std::size_t count = 1;
-    const std::vector<std::uint32_t> slab = slabs(mesh, h, count);
+    const std::vector<std::uint32_t> slab = slab_of_vertices(mesh, kSlabCells * h, count);
     std::vector<std::uint32_t> piece_of(mesh.triangles.size());
     for (std::size_t t = 0; t < piece_of.size(); ++t) {
       const glm::uvec3 tri = mesh.triangles[t];

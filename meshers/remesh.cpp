@@ -1,10 +1,12 @@
 #include "meshers/remesh.hpp"
 
+#include "meshers/relax.hpp"
 #include "meshers/submesh.hpp"
 #include "nodes/trimesh.hpp"
 #include "runtime/tape_eval.hpp"
 
 #include <glm/geometric.hpp>
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cmath>
@@ -14,6 +16,8 @@ namespace ht {
 namespace {
 
 constexpr double kCreaseCos = 0.8660254037844387;  // cos 30 degrees
+constexpr double kSlabTargets = 24.0;  // slabs are this many target edge lengths thick
+constexpr int kBandRings = 3;          // rings around the triangles across slabs, remeshed after
 
 glm::dvec3 g(const TriMesh::Point& p) { return {p[0], p[1], p[2]}; }
 TriMesh::Point om(const glm::dvec3& p) { return {p.x, p.y, p.z}; }
@@ -228,24 +232,64 @@ class Remesher {
   bool ok_ = false;
 };
 
+// Each part remeshed on its own, in parallel, its rim and `fixed` vertices locked; put back in
+// part order (renumber: as put_back).
+void remesh_parts(TriangleMesh& mesh, const Pieces& pieces, std::span<const std::uint8_t> fixed,
+                  const TapeEvaluator& field, double threshold, const RemeshOptions& options, RemeshStats& st,
+                  std::vector<std::uint32_t>* renumber) {
+  const std::size_t n = pieces.parts.size();
+  std::vector<TriangleMesh> changed(n);
+  std::vector<std::vector<std::uint32_t>> origin(n);
+  std::vector<RemeshStats> part_stats(n);
+  tbb::parallel_for(std::size_t(0), n, [&](std::size_t i) {
+    const Submesh& sub = pieces.parts[i];
+    changed[i] = sub.mesh;  // a part OpenMesh refuses stays as it was
+    origin[i] = sub.origin;
+    if (sub.mesh.triangles.empty()) return;
+    std::vector<std::uint8_t> locked(sub.mesh.positions.size());
+    for (std::size_t v = 0; v < locked.size(); ++v) locked[v] = sub.rim[v] || fixed[sub.origin[v]];
+    Remesher r(sub.mesh, sub.origin, locked, field, threshold, options.target);
+    if (!r.ok()) return;
+    r.run(options.iterations, part_stats[i]);
+    r.result(changed[i], origin[i]);
+  });
+  for (const RemeshStats& p : part_stats) st.splits += p.splits, st.collapses += p.collapses, st.flips += p.flips;
+  put_back(mesh, pieces, changed, origin, renumber);
+}
+
 }  // namespace
 
 void remesh_region(TriangleMesh& mesh, std::span<const std::uint8_t> region, std::span<const std::uint8_t> fixed,
                    const TapeEvaluator& field, double threshold, const RemeshOptions& options, RemeshStats* stats) {
   RemeshStats st;
-  // Only the triangles with a corner in the region go to OpenMesh; a vertex that any other
-  // triangle uses is on the rim and stays.
-  const Pieces taken = take_region(mesh, region);
-  const Submesh& sub = taken.parts[0];
-  std::vector<std::uint8_t> locked(sub.mesh.positions.size());
-  for (std::size_t v = 0; v < locked.size(); ++v) locked[v] = sub.rim[v] || fixed[sub.origin[v]];
-  Remesher r(sub.mesh, sub.origin, locked, field, threshold, options.target);
-  if (r.ok() && !sub.mesh.triangles.empty()) {
-    r.run(options.iterations, st);
-    std::vector<TriangleMesh> part(1);
-    std::vector<std::vector<std::uint32_t>> origin(1);
-    r.result(part[0], origin[0]);
-    put_back(mesh, taken, part, origin);
+  // Slabs of the region first, in parallel, each triangle with a corner in the region and all
+  // three in one slab; a vertex that any other triangle uses is on a rim and stays.
+  std::size_t count = 1;
+  const std::vector<std::uint32_t> slab = slab_of_vertices(mesh, kSlabTargets * options.target, count);
+  std::vector<std::uint32_t> piece_of(mesh.triangles.size(), ~0u);
+  std::vector<std::uint8_t> band(mesh.positions.size(), 0);
+  for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
+    const glm::uvec3 c = mesh.triangles[t];
+    if (!region[c[0]] && !region[c[1]] && !region[c[2]]) continue;
+    if (slab[c[0]] == slab[c[1]] && slab[c[0]] == slab[c[2]]) piece_of[t] = slab[c[0]];
+    else band[c[0]] = band[c[1]] = band[c[2]] = 1;
+  }
+  std::vector<std::uint32_t> renumber;
+  remesh_parts(mesh, take_pieces(mesh, std::move(piece_of), count), fixed, field, threshold, options, st, &renumber);
+  // Then the triangles across slabs and kBandRings rings of the region around them, each
+  // connected band on its own, in parallel.
+  if (std::find(band.begin(), band.end(), 1) != band.end()) {
+    auto moved = [&](std::span<const std::uint8_t> flags, std::uint8_t fresh) {
+      std::vector<std::uint8_t> out(mesh.positions.size(), fresh);  // vertices the slabs made
+      for (std::size_t v = 0; v < renumber.size(); ++v)
+        if (renumber[v] != ~0u) out[renumber[v]] = flags[v];
+      return out;
+    };
+    std::vector<std::uint8_t> seeds = moved(band, 0);
+    const std::vector<std::uint8_t> inside = moved(region, 1), fixed2 = moved(fixed, 0);
+    const std::vector<std::uint8_t> around = rings_around(mesh, seeds, inside, kBandRings);
+    for (std::size_t v = 0; v < seeds.size(); ++v) seeds[v] = (seeds[v] || around[v]) && inside[v];
+    remesh_parts(mesh, take_region(mesh, seeds, true), fixed2, field, threshold, options, st, nullptr);
   }
   if (stats) *stats = st;
 }

@@ -10,6 +10,12 @@
 // a crease (an edge whose triangles meet at more than 30 degrees), and every edge between two of
 // those. The region's boundary therefore does not move, and
 // vertices outside it keep their positions bit for bit (their indices may change).
+//
+// The region is cut into slabs 24 target lengths thick across the mesh's longest axis, at fixed
+// places (meshers/submesh.hpp slab_of_vertices), remeshed in parallel with their rims locked;
+// then the triangles across slabs with three rings of the region around them, each connected band
+// on its own, in parallel too. The slabs come from the mesh and the target alone, so the result is
+// the same at any thread count.
 #pragma once
 
 #include "meshers/triangle_mesh.hpp"

@@ -2,10 +2,13 @@
 
 #include "meshers/union_find.hpp"
 
+#include <glm/common.hpp>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <array>
+#include <cmath>
+#include <limits>
 
 namespace ht {
 namespace {
@@ -95,11 +98,13 @@ Pieces take_pieces(const TriangleMesh& mesh, std::vector<std::uint32_t> piece_of
     }
   });
   // A vertex is on a part's rim when a triangle of another part, or of none, uses it.
-  std::vector<std::uint32_t> owner(nv, ~0u);  // the one part using a vertex, or ~1u for several
+  // The one part using a vertex (~0u: only untaken triangles), ~1u for several, ~2u for none yet.
+  constexpr std::uint32_t kUnseen = ~2u;
+  std::vector<std::uint32_t> owner(nv, kUnseen);
   for (std::uint32_t t = 0; t < nt; ++t)
     for (int k = 0; k < 3; ++k) {
       std::uint32_t& o = owner[mesh.triangles[t][k]];
-      o = o == ~0u || o == piece_of[t] ? piece_of[t] : ~1u;
+      o = o == kUnseen || o == piece_of[t] ? piece_of[t] : ~1u;
     }
   Pieces out;
   out.parts.resize(count);
@@ -236,6 +241,25 @@ void from_openmesh(const TriMesh& m, OpenMesh::VPropHandleT<std::uint32_t> origi
     int k = 0;
     for (const auto v : m.fv_range(TriMesh::FaceHandle(faces[i]))) out.triangles[i][k++] = index[std::size_t(v.idx())];
   }
+}
+
+std::vector<std::uint32_t> slab_of_vertices(const TriangleMesh& mesh, double thickness, std::size_t& count) {
+  glm::dvec3 lo(std::numeric_limits<double>::max()), hi(-std::numeric_limits<double>::max());
+  for (const glm::dvec3& p : mesh.positions) lo = glm::min(lo, p), hi = glm::max(hi, p);
+  const glm::dvec3 size = hi - lo;
+  const int axis = size.x >= size.y && size.x >= size.z ? 0 : size.y >= size.z ? 1 : 2;
+  double d = thickness;
+  const double span = std::floor(hi[axis] / d) - std::floor(lo[axis] / d) + 1.0;
+  if (!(span <= double(kMaxSlabs))) d *= std::ceil(span / double(kMaxSlabs));
+  const double first = std::floor(lo[axis] / d);
+  std::vector<std::uint32_t> slab(mesh.positions.size());
+  count = 1;
+  for (std::size_t v = 0; v < slab.size(); ++v) {
+    const double k = std::floor(mesh.positions[v][axis] / d) - first;
+    slab[v] = std::uint32_t(k >= 0.0 ? std::min(k, double(kMaxSlabs)) : 0.0);  // NaN: slab 0
+    count = std::max<std::size_t>(count, slab[v] + 1);
+  }
+  return slab;
 }
 
 }  // namespace ht

@@ -43,6 +43,13 @@ Pieces take_pieces(const TriangleMesh& mesh, std::vector<std::uint32_t> piece_of
 void put_back(TriangleMesh& mesh, const Pieces& pieces, std::span<const TriangleMesh> changed,
               std::span<const std::vector<std::uint32_t>> origin, std::vector<std::uint32_t>* renumber = nullptr);
 
+/// Each vertex's slab across the mesh's longest axis: slab k holds [k d, (k + 1) d) along it for
+/// the thickness d, numbered from the lowest one used; `count` receives how many. Where the slabs
+/// lie depends on d alone (an edit elsewhere does not move them); past kMaxSlabs, d is a whole
+/// multiple thicker. A NaN coordinate goes to slab 0.
+inline constexpr std::size_t kMaxSlabs = 4096;
+std::vector<std::uint32_t> slab_of_vertices(const TriangleMesh& mesh, double thickness, std::size_t& count);
+
 /// Loads `mesh` into an empty `m` for editing (vertex, edge, halfedge and face status requested,
 /// as collapses and flips need): vertex v gets locked[v] (or false) and origin[v] (or v when
 /// `origin` is empty) in the two properties, which it adds. False when OpenMesh refuses a face
