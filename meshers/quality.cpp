@@ -294,13 +294,14 @@ class Improver {
   // its neighbours' triangle) keeps its neighbours' needles from collapsing: each of their short
   // edges has it as a third common neighbour, which OpenMesh's link check refuses. Removing it
   // leaves its three neighbours' triangle, whichever edge collapses; that triangle must face the
-  // way the ring did and not be degenerate.
+  // way the ring did and not be a needle. Not beside a locked vertex: there the ring may span two
+  // sheets (a crease), as for collapses.
   std::size_t remove_valence3() {
     std::size_t done = 0;
     const std::size_t n = m_.n_vertices();
     for (std::size_t vi = 0; vi < n; ++vi) {
       const VH v{int(vi)};
-      if (m_.status(v).deleted() || locked(v) || m_.is_boundary(v) || m_.valence(v) != 3) continue;
+      if (m_.status(v).deleted() || locked(v) || m_.is_boundary(v) || m_.valence(v) != 3 || near_locked(v)) continue;
       if (!(ring_thinness(v) > kNeedleCos)) continue;
       // Collapsing v into `to` turns v's face without `to` into the triangle that stays.
       const HH h = m_.halfedge_handle(v);
