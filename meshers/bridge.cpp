@@ -145,20 +145,20 @@ double perimeter(const std::vector<glm::dvec3>& pos, const std::vector<std::uint
 }
 
 // The patch loops (indices into `loops`, whose vertices are the patch's plus `base`) that no
-// operand loop took, if each is shorter than `longest` and lies on a piece of the patch with
-// another loop (a hole, not the whole rim of an island); empty otherwise, and then the caller's
-// count check fails.
+// operand loop took, if each is shorter than `longest` and lies on a piece of the patch that has
+// a loop an operand loop took (a hole beside a seam, not the rim of an island); empty otherwise,
+// and then the caller's count check fails.
 std::vector<std::size_t> unfaced_specks(const std::vector<glm::dvec3>& pos, const TriangleMesh& patch, std::uint32_t base,
                                         const std::vector<std::vector<std::uint32_t>>& loops,
                                         const std::vector<std::uint32_t>& taken, double longest) {
   UnionFind parts(patch.positions.size());
   for (const glm::uvec3& t : patch.triangles) parts.unite(t[0], t[1]), parts.unite(t[0], t[2]);
-  std::unordered_map<std::uint32_t, std::size_t> loops_on;
-  for (const auto& l : loops) ++loops_on[parts.find(l[0] - base)];
+  std::unordered_map<std::uint32_t, std::size_t> seams_on;
+  for (std::size_t l = 0; l < loops.size(); ++l) seams_on[parts.find(loops[l][0] - base)] += taken[l] ? 1 : 0;
   std::vector<std::size_t> out;
   for (std::size_t l = 0; l < loops.size(); ++l) {
     if (taken[l]) continue;
-    if (!(perimeter(pos, loops[l]) <= longest) || loops_on[parts.find(loops[l][0] - base)] < 2) return {};
+    if (!(perimeter(pos, loops[l]) <= longest) || seams_on[parts.find(loops[l][0] - base)] == 0) return {};
     out.push_back(l);
   }
   return out;

@@ -42,8 +42,8 @@ TriangleMesh pull_back_boundary(const TriangleMesh& mesh);
 
 /// Joins the operands' pieces and the patch: every boundary loop of an operand piece is bridged
 /// to the patch loop that faces it (each patch loop to at most one operand loop). A patch loop
-/// that no operand loop faces, shorter than max_width / 4 and a hole in a piece with other
-/// loops, is a speck of the cut: it is closed by a fan (around a new vertex at its centroid when
+/// that no operand loop faces, shorter than max_width / 4 and a hole in a piece that has a loop
+/// an operand loop faces, is a speck of the cut: it is closed by a fan (around a new vertex at its centroid when
 /// longer than three edges, which the caller puts on the surface). Throws BridgeError when the
 /// loops do not pair up so or a band would be wider than `max_width`.
 /// Parallel over loop pairs; deterministic.

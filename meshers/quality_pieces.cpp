@@ -7,6 +7,7 @@
 #include "meshers/quality_whole.hpp"
 #include "meshers/relax.hpp"
 #include "meshers/submesh.hpp"
+#include "meshers/union_find.hpp"
 #include "runtime/subtree_hash.hpp"
 
 #include <tbb/parallel_for.h>
@@ -150,20 +151,11 @@ void improve_pieces(TriangleMesh& mesh, const Pieces& pieces, std::span<const st
 std::vector<std::uint8_t> lock_small_components(const TriangleMesh& mesh, std::span<const std::uint8_t> locked,
                                                 double h) {
   const std::size_t n = mesh.positions.size();
-  std::vector<std::uint32_t> parent(n);
-  for (std::uint32_t v = 0; v < n; ++v) parent[v] = v;
-  auto root = [&](std::uint32_t v) {
-    while (parent[v] != v) v = parent[v] = parent[parent[v]];
-    return v;
-  };
-  for (const glm::uvec3& t : mesh.triangles) {
-    const std::uint32_t a = root(t[0]), b = root(t[1]), c = root(t[2]);
-    parent[b] = a;
-    parent[root(c)] = a;
-  }
+  UnionFind parts(n);
+  for (const glm::uvec3& t : mesh.triangles) parts.unite(t[0], t[1]), parts.unite(t[0], t[2]);
   std::vector<glm::dvec3> lo(n, glm::dvec3(std::numeric_limits<double>::max())), hi(n, -lo[0]);
   for (std::uint32_t v = 0; v < n; ++v) {
-    const std::uint32_t r = root(v);
+    const std::uint32_t r = parts.find(v);
     lo[r] = glm::min(lo[r], mesh.positions[v]);
     hi[r] = glm::max(hi[r], mesh.positions[v]);
   }
@@ -171,7 +163,7 @@ std::vector<std::uint8_t> lock_small_components(const TriangleMesh& mesh, std::s
   if (!locked.empty()) std::copy(locked.begin(), locked.end(), out.begin());
   const double small = kSmallComponentCells * h;
   for (std::uint32_t v = 0; v < n; ++v) {
-    const glm::dvec3 size = hi[root(v)] - lo[root(v)];
+    const glm::dvec3 size = hi[parts.find(v)] - lo[parts.find(v)];
     if (size.x < small && size.y < small && size.z < small) out[v] = 1;
   }
   return out;
