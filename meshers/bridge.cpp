@@ -151,6 +151,7 @@ double perimeter(const std::vector<glm::dvec3>& pos, const std::vector<std::uint
 std::vector<std::size_t> unfaced_specks(const std::vector<glm::dvec3>& pos, const TriangleMesh& patch, std::uint32_t base,
                                         const std::vector<std::vector<std::uint32_t>>& loops,
                                         const std::vector<std::uint32_t>& taken, double longest) {
+  if (std::all_of(taken.begin(), taken.end(), [](std::uint32_t t) { return t != 0; })) return {};  // the common case
   UnionFind parts(patch.positions.size());
   for (const glm::uvec3& t : patch.triangles) parts.unite(t[0], t[1]), parts.unite(t[0], t[2]);
   std::unordered_map<std::uint32_t, std::size_t> seams_on;

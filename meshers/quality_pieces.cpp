@@ -194,13 +194,7 @@ void improve_quality(TriangleMesh& mesh, std::span<const std::uint8_t> locked, s
     locked = kept;
     improve_pieces(mesh, pieces, locked, crease, field, threshold, h, options, reuse, st, renumber);
     // The band's vertices were rims, locked: they survive, under new indices.
-    auto moved = [&](std::span<const std::uint8_t> flags) {
-      std::vector<std::uint8_t> out(mesh.positions.size(), 0);
-      if (!flags.empty())
-        for (std::size_t v = 0; v < renumber.size(); ++v)
-          if (renumber[v] != ~0u) out[renumber[v]] = flags[v];
-      return out;
-    };
+    auto moved = [&](std::span<const std::uint8_t> flags) { return renumbered(flags, renumber, mesh.positions.size()); };
     if (crease_after && !crease.empty()) *crease_after = moved(crease);
     if (!pieces.rest.empty()) {
       // Three rings around it: the slabs' rims and their neighbours did not move, nor will a

@@ -279,11 +279,9 @@ void remesh_region(TriangleMesh& mesh, std::span<const std::uint8_t> region, std
   // Then the triangles across slabs and kBandRings rings of the region around them, each
   // connected band on its own, in parallel.
   if (std::find(band.begin(), band.end(), 1) != band.end()) {
+    // Vertices the slabs made are inside the region, neither band nor fixed.
     auto moved = [&](std::span<const std::uint8_t> flags, std::uint8_t fresh) {
-      std::vector<std::uint8_t> out(mesh.positions.size(), fresh);  // vertices the slabs made
-      for (std::size_t v = 0; v < renumber.size(); ++v)
-        if (renumber[v] != ~0u) out[renumber[v]] = flags[v];
-      return out;
+      return renumbered(flags, renumber, mesh.positions.size(), fresh);
     };
     std::vector<std::uint8_t> seeds = moved(band, 0);
     const std::vector<std::uint8_t> inside = moved(region, 1), fixed2 = moved(fixed, 0);

@@ -262,4 +262,13 @@ std::vector<std::uint32_t> slab_of_vertices(const TriangleMesh& mesh, double thi
   return slab;
 }
 
+std::vector<std::uint8_t> renumbered(std::span<const std::uint8_t> flags, std::span<const std::uint32_t> renumber,
+                                     std::size_t size, std::uint8_t fresh) {
+  std::vector<std::uint8_t> out(size, fresh);
+  if (!flags.empty())
+    for (std::size_t v = 0; v < renumber.size(); ++v)
+      if (renumber[v] != ~0u) out[renumber[v]] = flags[v];
+  return out;
+}
+
 }  // namespace ht

@@ -50,6 +50,12 @@ void put_back(TriangleMesh& mesh, const Pieces& pieces, std::span<const Triangle
 inline constexpr std::size_t kMaxSlabs = 4096;
 std::vector<std::uint32_t> slab_of_vertices(const TriangleMesh& mesh, double thickness, std::size_t& count);
 
+/// Per-vertex flags carried through put_back's `renumber` (old index -> new, ~0u: dropped) onto a
+/// mesh of `size` vertices; vertices no old one became (made by the work) get `fresh`, and so
+/// does every vertex when `flags` is empty.
+std::vector<std::uint8_t> renumbered(std::span<const std::uint8_t> flags, std::span<const std::uint32_t> renumber,
+                                     std::size_t size, std::uint8_t fresh = 0);
+
 /// Loads `mesh` into an empty `m` for editing (vertex, edge, halfedge and face status requested,
 /// as collapses and flips need): vertex v gets locked[v] (or false) and origin[v] (or v when
 /// `origin` is empty) in the two properties, which it adds. False when OpenMesh refuses a face
