@@ -12,4 +12,8 @@ namespace ht {
 /// Writes one value per point. It must be deterministic and may be called from any thread.
 using BatchField = std::function<void(std::span<const glm::dvec3> points, std::span<double> values)>;
 
+/// Writes one value (when `values` is not empty) and one gradient per point; the same contract.
+using BatchGradient =
+    std::function<void(std::span<const glm::dvec3> points, std::span<double> values, std::span<glm::dvec3> gradients)>;
+
 }  // namespace ht

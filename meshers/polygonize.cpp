@@ -191,7 +191,7 @@ std::vector<EdgeVertex> join_bricks(const std::vector<BrickOutput>& outputs, Tri
 
 // Vertices a hair from a grid point (a surface through grid points: faces on grid planes) merge
 // into one there (meshers/snap.hpp); `snapped` receives the merged vertices put on a crease.
-void snap_phase(const Grid& grid, const std::vector<EdgeVertex>& all, const FeatureOptions& features, RootField& field,
+void snap_phase(const Grid& grid, const std::vector<EdgeVertex>& all, const FeatureOptions& features, SurfaceField& field,
                 TriangleMesh& mesh, std::vector<glm::vec3>& normals, std::vector<std::uint8_t>& snapped,
                 PolygonizeStats& stats) {
   std::vector<std::uint64_t> near(all.size(), ~std::uint64_t(0));
@@ -210,7 +210,10 @@ void snap_phase(const Grid& grid, const std::vector<EdgeVertex>& all, const Feat
   }
   if (count == 0) return;
   const SnapOptions options{features.sharp_angle_degrees, features.max_error};
-  snap_to_grid_points(mesh, near, normals, snapped, field.get(), field.T, grid.h, options, &stats.snap);
+  const BatchGradient on_bricks = [&field](std::span<const glm::dvec3> p, std::span<double> v, std::span<glm::dvec3> g) {
+    field.gradient(p, v, g);
+  };
+  snap_to_grid_points(mesh, near, normals, snapped, on_bricks, field.threshold(), grid.h, options, &stats.snap);
 }
 
 // Folds left by the crease step or the quality pass: collapsed (meshers/unfold.hpp), and where
@@ -558,8 +561,11 @@ TriangleMesh polygonize(std::shared_ptr<const Graph> graph, NodeId root, double 
   std::vector<glm::vec3> normals(all.size());
   for (std::size_t i = 0; i < all.size(); ++i) normals[i] = all[i].normal;
   RootField root_field{graph, root, T, nullptr};
+  // The field near the surface on the bricks' own tapes, for the passes that move vertices.
+  SurfaceField field(graph, root, T, grid.origin, kCells * h);
+  for (std::size_t a = 0; a < active.size(); ++a) field.adopt(grid.brick_at(active[a]), tapes[a]);
   std::vector<std::uint8_t> on_crease;  // snapped vertices put on a crease, then the crease step's points
-  if (options.snap) snap_phase(grid, all, options.features, root_field, mesh, normals, on_crease, stats);
+  if (options.snap) snap_phase(grid, all, options.features, field, mesh, normals, on_crease, stats);
   stats.seconds_merge = seconds_since(t0);
 
   // 5. Creases: split the edges that cross them (meshers/features.hpp), untangle, unfold.
@@ -570,8 +576,6 @@ TriangleMesh polygonize(std::shared_ptr<const Graph> graph, NodeId root, double 
   // 6. Well-shaped triangles (meshers/quality.hpp), on the bricks' own tapes; crease points stay.
   //    A patch (filtered or clipped) is the local strategies' to remesh with its bands.
   if (options.quality.enabled && !options.brick_filter && !clipped) {
-    SurfaceField field(graph, root, T, grid.origin, kCells * h);
-    for (std::size_t a = 0; a < active.size(); ++a) field.adopt(grid.brick_at(active[a]), tapes[a]);
     const QualityReuse reuse = keys.empty() ? QualityReuse{} : brick::quality_reuse(view, *options.pieces);
     quality_phase(field, root_field, h, options.quality, budget, mesh, on_crease, keys.empty() ? nullptr : &reuse, stats);
   }

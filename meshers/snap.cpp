@@ -1,7 +1,6 @@
 #include "meshers/snap.hpp"
 
 #include "meshers/union_find.hpp"
-#include "runtime/tape_eval.hpp"
 
 #include <glm/geometric.hpp>
 #include <glm/mat3x3.hpp>
@@ -27,19 +26,26 @@ std::vector<std::uint32_t> by_point(std::span<const std::uint64_t> near) {
   return order;
 }
 
+// contractible()'s arrays, kept across clusters.
+struct ContractScratch {
+  std::vector<std::uint32_t> tris;
+  std::vector<std::uint64_t> edges, far;  // far: the outside edge of each triangle that survives
+};
+
 // A cluster may merge when the patch it spans (its vertices, the edges and triangles among them)
 // is a disc, Euler characteristic V - E + F = 1, and every outside vertex next to it keeps a
 // manifold edge to the merged vertex: exactly two surviving triangles use that edge, and no
 // outside edge is in two of them (the link condition). `ring` receives the outside neighbours.
 bool contractible(const TriangleMesh& m, const std::vector<std::uint32_t>& cluster,
-                  const std::vector<std::vector<std::uint32_t>>& tris_of, std::vector<std::uint32_t>& ring) {
-  std::vector<std::uint32_t> tris;
+                  const std::vector<std::vector<std::uint32_t>>& tris_of, std::vector<std::uint32_t>& ring,
+                  ContractScratch& scratch) {
+  auto& [tris, edges, far] = scratch;
+  tris.clear(), edges.clear(), far.clear();
   for (std::uint32_t v : cluster) tris.insert(tris.end(), tris_of[v].begin(), tris_of[v].end());
   std::sort(tris.begin(), tris.end());
   tris.erase(std::unique(tris.begin(), tris.end()), tris.end());
   auto in = [&](std::uint32_t v) { return std::binary_search(cluster.begin(), cluster.end(), v); };
   std::size_t inner = 0;  // triangles with all three corners in the cluster
-  std::vector<std::uint64_t> edges, far;  // far: the outside edge of each triangle that survives
   ring.clear();
   for (std::uint32_t t : tris) {
     int k = 0;
@@ -112,12 +118,11 @@ glm::dvec3 plane_point(std::span<const glm::dvec3> p, std::span<const glm::dvec3
 // of the cluster's tangent planes, which becomes a crease point with no normal (so the feature
 // step does not split its edges), when it is on the surface and near the cluster.
 void place_merged(TriangleMesh& mesh, const std::vector<std::vector<std::uint32_t>>& clusters,
-                  std::vector<glm::vec3>& normals, std::vector<std::uint8_t>& crease, const TapeEvaluator& field,
+                  std::vector<glm::vec3>& normals, std::vector<std::uint8_t>& crease, const BatchGradient& field,
                   double T, double h, const SnapOptions& options, SnapStats& st) {
   const double cos_sharp = std::cos(options.sharp_angle_degrees * std::numbers::pi / 180.0);
   const std::size_t n = clusters.size();
-  std::vector<glm::dvec3> mean(n), at(n), grad(n);
-  std::vector<double> value(n);
+  std::vector<glm::dvec3> mean(n), at(n);
   std::vector<std::uint8_t> sharp(n, 0);
   std::vector<glm::dvec3> p, nn;
   for (std::size_t c = 0; c < n; ++c) {
@@ -139,11 +144,18 @@ void place_merged(TriangleMesh& mesh, const std::vector<std::vector<std::uint32_
     normals[cluster[0]] = first;
   }
   if (n == 0) return;
-  field.gradient(at, value, grad);
-  for (std::size_t c = 0; c < n; ++c) {
-    if (!sharp[c]) continue;
-    const double g = glm::length(grad[c]);
-    if (g > 0 && std::abs(value[c] - T) <= options.max_error * h * g && glm::length(at[c] - mean[c]) <= h) {
+  // Only the sharp clusters' plane points are checked against the field.
+  std::vector<std::size_t> sharp_ones;
+  std::vector<glm::dvec3> sp;
+  for (std::size_t c = 0; c < n; ++c)
+    if (sharp[c]) sharp_ones.push_back(c), sp.push_back(at[c]);
+  std::vector<double> sv(sp.size());
+  std::vector<glm::dvec3> sg(sp.size());
+  if (!sp.empty()) field(sp, sv, sg);
+  for (std::size_t i = 0; i < sharp_ones.size(); ++i) {
+    const std::size_t c = sharp_ones[i];
+    const double g = glm::length(sg[i]);
+    if (g > 0 && std::abs(sv[i] - T) <= options.max_error * h * g && glm::length(at[c] - mean[c]) <= h) {
       const std::uint32_t head = clusters[c][0];
       mesh.positions[head] = at[c];
       crease[head] = 1;
@@ -154,6 +166,8 @@ void place_merged(TriangleMesh& mesh, const std::vector<std::vector<std::uint32_
       at[c] = mean[c];
     }
   }
+  // The smooth clusters' means onto the surface: two Newton steps (one leaves a face off by half
+  // a cell where a cluster beside a crease was judged smooth: tests/test_features.cpp).
   std::vector<std::size_t> smooth;
   std::vector<glm::dvec3> q;
   for (std::size_t c = 0; c < n; ++c)
@@ -161,7 +175,7 @@ void place_merged(TriangleMesh& mesh, const std::vector<std::vector<std::uint32_
   std::vector<glm::dvec3> qg(q.size());
   std::vector<double> qv(q.size());
   for (int step = 0; step < 2 && !q.empty(); ++step) {
-    field.gradient(q, qv, qg);
+    field(q, qv, qg);
     for (std::size_t i = 0; i < q.size(); ++i) {
       const double g2 = glm::dot(qg[i], qg[i]);
       if (g2 > 0 && std::isfinite(g2)) q[i] -= (qv[i] - T) / g2 * qg[i];
@@ -172,7 +186,7 @@ void place_merged(TriangleMesh& mesh, const std::vector<std::vector<std::uint32_
 
 // One round: every cluster whose neighbourhood no other merge of the round touches.
 void snap_round(TriangleMesh& mesh, std::vector<std::uint64_t>& near, std::vector<glm::vec3>& normals,
-                std::vector<std::uint8_t>& crease, const TapeEvaluator& field, double T, double h,
+                std::vector<std::uint8_t>& crease, const BatchGradient& field, double T, double h,
                 const SnapOptions& options, SnapStats& st) {
   std::vector<std::vector<std::uint32_t>> tris_of(mesh.positions.size());
   for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t)
@@ -182,6 +196,7 @@ void snap_round(TriangleMesh& mesh, std::vector<std::uint64_t>& near, std::vecto
   UnionFind uf(mesh.positions.size());
   std::vector<std::vector<std::uint32_t>> clusters;
   std::vector<std::uint32_t> ring;
+  ContractScratch scratch;
   std::vector<std::uint8_t> touched(mesh.positions.size(), 0);
   for (std::size_t i = 0; i < order.size();) {
     std::size_t j = i;
@@ -192,7 +207,7 @@ void snap_round(TriangleMesh& mesh, std::vector<std::uint64_t>& near, std::vecto
     // Clusters merge one neighbourhood at a time: none touches another merged one, so each
     // check above holds for the mesh the others leave.
     const bool free = std::none_of(cluster.begin(), cluster.end(), [&](std::uint32_t v) { return touched[v]; });
-    const bool ok = free && contractible(mesh, cluster, tris_of, ring);
+    const bool ok = free && contractible(mesh, cluster, tris_of, ring, scratch);
     if (!ok || std::any_of(ring.begin(), ring.end(), [&](std::uint32_t v) { return touched[v]; })) {
       ++st.skipped_points;
       continue;
@@ -233,7 +248,7 @@ void snap_round(TriangleMesh& mesh, std::vector<std::uint64_t>& near, std::vecto
 }  // namespace
 
 void snap_to_grid_points(TriangleMesh& mesh, std::span<const std::uint64_t> near_in, std::vector<glm::vec3>& normals,
-                         std::vector<std::uint8_t>& crease, const TapeEvaluator& field, double T, double h,
+                         std::vector<std::uint8_t>& crease, const BatchGradient& field, double T, double h,
                          const SnapOptions& options, SnapStats* stats) {
   SnapStats total;
   std::vector<std::uint64_t> near(near_in.begin(), near_in.end());

@@ -13,6 +13,7 @@
 // the point of the cluster's tangent planes instead and is flagged as a crease point.
 #pragma once
 
+#include "meshers/batch_field.hpp"
 #include "meshers/triangle_mesh.hpp"
 
 #include <cstdint>
@@ -20,8 +21,6 @@
 #include <vector>
 
 namespace ht {
-
-class TapeEvaluator;
 
 struct SnapOptions {
   double sharp_angle_degrees = 25.0;  ///< cluster normals further apart: the point is on a crease
@@ -38,11 +37,12 @@ struct SnapStats {
 /// `near[v]` names the grid point vertex v lies close to, or ~0 when none. `normals` (one per
 /// vertex; zero where unknown) follow the merge: a merged vertex keeps its cluster's first known
 /// normal, or none when it became a crease point. `crease` receives one flag per vertex of the
-/// result. `field` is a tape of the surface (threshold T), h the cell size. Deterministic: the
+/// result. `field` gives the surface's field and gradient (threshold T; the polygonizer passes its
+/// bricks' tapes, meshers/surface_field.hpp), h the cell size. Deterministic: the
 /// clusters are visited in the order of their grid points. Cost: O(n) plus one gradient per
 /// merged vertex.
 void snap_to_grid_points(TriangleMesh& mesh, std::span<const std::uint64_t> near, std::vector<glm::vec3>& normals,
-                         std::vector<std::uint8_t>& crease, const TapeEvaluator& field, double threshold, double h,
+                         std::vector<std::uint8_t>& crease, const BatchGradient& field, double threshold, double h,
                          const SnapOptions& options = {}, SnapStats* stats = nullptr);
 
 }  // namespace ht
