@@ -78,7 +78,9 @@ struct SceneRelease {
 struct TriRecord {
   glm::dvec3 a, b, c;
   glm::dvec3 centre;  // centroid; with reach, a bounding sphere that rejects far triangles early
+  glm::dvec3 normal;  // unit, or zero when degenerate: with the sphere, a disc that rejects tighter
   double reach;
+  double thickness;   // the corners' largest distance from that plane (rounding, a needle's poor normal)
   std::uint32_t tri;  // index into triangles_
 };
 

@@ -111,6 +111,9 @@ void MeshLeaf::Accel::compute_normals(const std::vector<glm::dvec3>& pos, const 
     r.c = pos[t[2]];
     r.centre = (r.a + r.b + r.c) / 3.0;
     r.reach = std::max({glm::length(r.a - r.centre), glm::length(r.b - r.centre), glm::length(r.c - r.centre)});
+    r.normal = unit_or_zero(glm::cross(r.b - r.a, r.c - r.a));
+    r.thickness = std::max({std::abs(glm::dot(r.a - r.centre, r.normal)), std::abs(glm::dot(r.b - r.centre, r.normal)),
+                            std::abs(glm::dot(r.c - r.centre, r.normal))});
     r.tri = order[slot];
   }
   face_normal.resize(tris.size());
@@ -230,6 +233,14 @@ bool point_query_visit(RTCPointQueryFunctionArguments* args) {
   const glm::dvec3 to_centre = st->p - rec.centre;
   const double reach = rec.reach + st->best;
   if (glm::dot(to_centre, to_centre) >= reach * reach) return false;
+  // The triangle lies in a disc of radius reach around its centre, thickness thick, so p is at
+  // least sqrt(above^2 + gap^2) from it. Seen from above, a surface's triangles beside the
+  // nearest one pass the sphere (their centres are barely farther than the nearest point) but
+  // not the disc. The margin keeps rounding from rejecting a triangle as near as the best.
+  const double across = glm::dot(to_centre, rec.normal);
+  const double above = std::max(0.0, std::abs(across) - rec.thickness);
+  const double gap = std::max(0.0, glm::length(to_centre - across * rec.normal) - rec.reach);
+  if (above * above + gap * gap > st->best2 * (1.0 + 1e-9)) return false;
   const std::uint32_t t = rec.tri;
   const Nearest n = closest_on_triangle(st->p, rec.a, rec.b, rec.c);
   const glm::dvec3 d = st->p - n.point;
@@ -251,7 +262,7 @@ bool point_query_visit(RTCPointQueryFunctionArguments* args) {
 }
 }  // namespace
 
-MeshLeaf::Closest MeshLeaf::query(const glm::dvec3& p, double radius) const {
+MeshLeaf::Closest MeshLeaf::query(const glm::dvec3& p, double radius, double bound) const {
   if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) return {kInf, false, p};
   if (largest_coordinate(p) > kMaxCoordinate) return far_query(p, radius);
   const double mag = std::max({accel_->scale, std::abs(p.x), std::abs(p.y), std::abs(p.z)});
@@ -264,10 +275,12 @@ MeshLeaf::Closest MeshLeaf::query(const glm::dvec3& p, double radius) const {
   q.y = static_cast<float>(p.y);
   q.z = static_cast<float>(p.z);
   q.time = 0.0f;
-  // Embree already visits near nodes first (measured: starting from the nearest vertex's
-  // distance saves under 15% of the triangle visits), so the query starts at the full radius.
-  q.radius = radius >= static_cast<double>(FLT_MAX) ? std::numeric_limits<float>::infinity()
-                                                    : static_cast<float>(std::max(radius, 0.0)) + st.slack;
+  // Embree visits near nodes first, but enters every node the ball reaches before the nearest
+  // triangle shrinks it: a neighbour's bound, when smaller, cuts those. A triangle as near as the
+  // nearest lies within the bound, so the answer does not change.
+  const double start = std::min(radius, bound * (1.0 + 1e-9));
+  q.radius = start >= static_cast<double>(FLT_MAX) ? std::numeric_limits<float>::infinity()
+                                                   : static_cast<float>(std::max(start, 0.0)) + st.slack;
   // Embree hands over every triangle of each leaf it reaches, near or not: only those within the
   // (slackened) radius may become the closest, or a far triangle's pseudo-normal would decide.
   st.best = static_cast<double>(q.radius);
@@ -327,8 +340,15 @@ bool MeshLeaf::inside(const glm::dvec3& p) const {
 void MeshLeaf::query_batch(const float* xs, const float* ys, const float* zs, std::size_t n, float radius,
                            float* distance, std::uint8_t* inside) const {
   if (n >= 8 && !winding_ && shared_far_block(xs, ys, zs, n, radius, distance, inside)) return;
+  // Each point's search starts from the previous point's nearest point: the points of a block
+  // are neighbours, and the distance to it bounds the distance to the mesh.
+  glm::dvec3 last(0.0);
+  bool have_last = false;
   for (std::size_t i = 0; i < n; ++i) {
-    const Closest c = query(glm::dvec3(xs[i], ys[i], zs[i]), static_cast<double>(radius));
+    const glm::dvec3 p(xs[i], ys[i], zs[i]);
+    const Closest c = query(p, static_cast<double>(radius), have_last ? glm::length(p - last) : kInf);
+    have_last = std::isfinite(c.distance);
+    if (have_last) last = c.point;
     distance[i] =
         std::isfinite(c.distance) ? static_cast<float>(c.distance) : std::numeric_limits<float>::infinity();
     inside[i] = c.inside ? 1 : 0;

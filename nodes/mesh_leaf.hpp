@@ -94,7 +94,10 @@ class MeshLeaf {
     glm::dvec3 normal{0.0};
   };
   /// Distance to the nearest triangle if it is closer than `radius`, and the inside test.
-  Closest query(const glm::dvec3& p, double radius) const;
+  /// `bound`, when given, is a distance the nearest triangle is known to lie within (the distance
+  /// from p to a neighbouring point's nearest point): the search starts there instead of at
+  /// `radius`, which only saves work; the answer is the same.
+  Closest query(const glm::dvec3& p, double radius, double bound = std::numeric_limits<double>::infinity()) const;
   /// Inside test alone.
   bool inside(const glm::dvec3& p) const;
   /// For a winding leaf: +1 when every point of the box is inside, 0 when none is, -1 when that

@@ -4,6 +4,7 @@
 #include "runtime/morton.hpp"
 #include "runtime/tape_ops.hpp"
 
+#include <glm/geometric.hpp>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -230,9 +231,14 @@ void mesh_loop(const Tape& tape, const Block<Dual>& b, const Instruction& ins, c
   const Dual* y = b.axis(ins.a, 1);
   const Dual* z = b.axis(ins.a, 2);
   Dual* out = b.reg(ins.out);
+  glm::dvec3 last(0.0);  // the previous point's nearest point bounds this one's search
+  bool have_last = false;
   for (int i = 0; i < n; ++i) {
     const glm::dvec3 p(x[i].v, y[i].v, z[i].v);
-    const MeshLeaf::Closest c = leaf.query(p, static_cast<double>(radius));
+    const MeshLeaf::Closest c =
+        leaf.query(p, static_cast<double>(radius), have_last ? glm::length(p - last) : std::numeric_limits<double>::infinity());
+    have_last = std::isfinite(c.distance);
+    if (have_last) last = c.point;
     const float dm = std::isfinite(c.distance) ? static_cast<float>(c.distance) : std::numeric_limits<float>::infinity();
     const float d = pseudo_distance(dm, c.inside, r0);
     if (!(d < kernel) || d == 0.0f || !std::isfinite(dm)) {
