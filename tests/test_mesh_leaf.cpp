@@ -339,6 +339,50 @@ TEST(MeshQuery, BatchAgreesWithSingle) {
   EXPECT_GT(finite, 100u);
 }
 
+// A bound on the nearest distance (a neighbour's nearest point, or the distance itself, the
+// tightest a caller can know) only speeds the search up: the answer is the same bit for bit,
+// on a real scan with its needles (bunny00) and on points a cell apart as bricks sample them.
+TEST(MeshQuery, BoundChangesNothing) {
+  Rng rng = seeded();
+  const auto leaf = MeshLeaf::load(test::cgal_mesh("bunny00.off"));
+  const double diag = diagonal(leaf->bounds()), R = 0.05 * diag, h = 0.005 * diag;
+  std::vector<glm::dvec3> pts;
+  for (const glm::dvec3& start : random_points(rng, leaf->bounds().expanded(R), 40))  // rows a cell apart
+    for (int i = 0; i < 16; ++i) pts.push_back(start + glm::dvec3(h * i, 0.0, 0.0));
+  const auto more = random_points(rng, leaf->bounds().expanded(R), 400);
+  pts.insert(pts.end(), more.begin(), more.end());
+  auto same = [](const MeshLeaf::Closest& a, const MeshLeaf::Closest& b) {
+    return (a.distance == b.distance || (std::isinf(a.distance) && std::isinf(b.distance))) && a.inside == b.inside &&
+           (std::isinf(a.distance) || (a.point == b.point && a.normal == b.normal));
+  };
+  std::size_t bounded = 0;
+  for (std::size_t i = 1; i < pts.size(); ++i) {
+    const MeshLeaf::Closest free = leaf->query(pts[i], R), prev = leaf->query(pts[i - 1], R);
+    if (std::isfinite(free.distance)) {
+      ASSERT_TRUE(same(free, leaf->query(pts[i], R, free.distance))) << i;
+      ++bounded;
+    }
+    if (std::isfinite(prev.distance)) {
+      ASSERT_TRUE(same(free, leaf->query(pts[i], R, glm::length(pts[i] - prev.point)))) << i;
+    }
+  }
+  EXPECT_GT(bounded, 200u);
+  // The batch, which bounds each point by the one before, against single queries.
+  std::vector<float> xs, ys, zs;
+  for (const auto& p : pts) xs.push_back(float(p.x)), ys.push_back(float(p.y)), zs.push_back(float(p.z));
+  std::vector<float> dist(pts.size());
+  std::vector<std::uint8_t> in(pts.size());
+  for (std::size_t at = 0; at < pts.size(); at += 256) {
+    const std::size_t n = std::min<std::size_t>(256, pts.size() - at);
+    leaf->query_batch(&xs[at], &ys[at], &zs[at], n, float(R), &dist[at], &in[at]);
+  }
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    const auto q = leaf->query(glm::dvec3(xs[i], ys[i], zs[i]), double(float(R)));
+    ASSERT_EQ(in[i] != 0, q.inside) << i;
+    ASSERT_EQ(dist[i], std::isfinite(q.distance) ? float(q.distance) : std::numeric_limits<float>::infinity()) << i;
+  }
+}
+
 TEST(MeshQuery, ConcurrentQueriesAgreeWithSerial) {
   // No shared mutable state: the same answers from many threads at once.
   Rng rng = seeded();
