@@ -262,7 +262,7 @@ bool point_query_visit(RTCPointQueryFunctionArguments* args) {
 }
 }  // namespace
 
-MeshLeaf::Closest MeshLeaf::query(const glm::dvec3& p, double radius, double bound) const {
+MeshLeaf::Closest MeshLeaf::query(const glm::dvec3& p, double radius, double bound, int side_if_none) const {
   if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) return {kInf, false, p};
   if (largest_coordinate(p) > kMaxCoordinate) return far_query(p, radius);
   const double mag = std::max({accel_->scale, std::abs(p.x), std::abs(p.y), std::abs(p.z)});
@@ -288,7 +288,7 @@ MeshLeaf::Closest MeshLeaf::query(const glm::dvec3& p, double radius, double bou
   RTCPointQueryContext ctx;
   rtcInitPointQueryContext(&ctx);
   rtcPointQuery(accel_->scene.get(), &q, &ctx, point_query_visit, &st);
-  if (st.tri == kNone) return {kInf, inside(p), p};
+  if (st.tri == kNone) return {kInf, side_if_none >= 0 && !winding_ ? side_if_none == 1 : inside(p), p};
   const double dist = std::sqrt(st.best2);
   // Baerentzen & Aanaes: p is inside iff p - closest points against the closest feature's
   // angle-weighted pseudo-normal. On the surface itself (dist 0) either answer gives the same
@@ -341,14 +341,22 @@ void MeshLeaf::query_batch(const float* xs, const float* ys, const float* zs, st
                            float* distance, std::uint8_t* inside) const {
   if (n >= 8 && !winding_ && shared_far_block(xs, ys, zs, n, radius, distance, inside)) return;
   // Each point's search starts from the previous point's nearest point: the points of a block
-  // are neighbours, and the distance to it bounds the distance to the mesh.
-  glm::dvec3 last(0.0);
+  // are neighbours, and the distance to it bounds the distance to the mesh. A point with no
+  // triangle within the radius passes its side on: a closed surface does not cross the empty
+  // ball around it, so a neighbour within half the radius that finds no triangle either is on
+  // the same side, without casting rays (as for a whole block in shared_far_block).
+  glm::dvec3 last(0.0), far_at(0.0);
   bool have_last = false;
+  int far_side = -1;
+  const double r = static_cast<double>(radius);
   for (std::size_t i = 0; i < n; ++i) {
     const glm::dvec3 p(xs[i], ys[i], zs[i]);
-    const Closest c = query(p, static_cast<double>(radius), have_last ? glm::length(p - last) : kInf);
+    const int side = far_side >= 0 && glm::length(p - far_at) <= 0.5 * r ? far_side : -1;
+    const Closest c = query(p, r, have_last ? glm::length(p - last) : kInf, side);
     have_last = std::isfinite(c.distance);
     if (have_last) last = c.point;
+    far_side = !have_last && std::isfinite(r) ? int(c.inside) : -1;
+    far_at = p;
     distance[i] =
         std::isfinite(c.distance) ? static_cast<float>(c.distance) : std::numeric_limits<float>::infinity();
     inside[i] = c.inside ? 1 : 0;

@@ -96,8 +96,12 @@ class MeshLeaf {
   /// Distance to the nearest triangle if it is closer than `radius`, and the inside test.
   /// `bound`, when given, is a distance the nearest triangle is known to lie within (the distance
   /// from p to a neighbouring point's nearest point): the search starts there instead of at
-  /// `radius`, which only saves work; the answer is the same.
-  Closest query(const glm::dvec3& p, double radius, double bound = std::numeric_limits<double>::infinity()) const;
+  /// `radius`, which only saves work; the answer is the same. `side_if_none`, when 0 (outside) or
+  /// 1 (inside), is p's side as the caller knows it should no triangle lie within the radius: a
+  /// neighbour within half the radius found none either and was on that side (a closed surface
+  /// does not cross the empty ball around it); it spares the rays, and a winding leaf ignores it.
+  Closest query(const glm::dvec3& p, double radius, double bound = std::numeric_limits<double>::infinity(),
+                int side_if_none = -1) const;
   /// Inside test alone.
   bool inside(const glm::dvec3& p) const;
   /// For a winding leaf: +1 when every point of the box is inside, 0 when none is, -1 when that

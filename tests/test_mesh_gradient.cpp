@@ -4,6 +4,7 @@
 #include "nodes/mesh_leaf.hpp"
 #include "nodes/warps.hpp"
 #include "runtime/builder.hpp"
+#include "runtime/tape_eval.hpp"
 #include "tests/support/test_support.hpp"
 
 #include <glm/geometric.hpp>
@@ -14,6 +15,7 @@
 #include <cmath>
 #include <cstdio>
 #include <functional>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -170,6 +172,38 @@ TEST(MeshGradient, BoxCornerGradientIsTheDiagonal) {
   }
   // An edge midpoint: the bisector of its two faces.
   EXPECT_GT(cosine(tree.reference_gradient(dvec3(1, 0, 1)), dvec3(-1, 0, -1)), 1 - 1e-9);
+}
+
+// The tape's gradient loop carries state from point to point (a bound from the previous point's
+// nearest point, a far point's side passed on): rows of points a fiftieth of the box apart,
+// across the bunny and beyond its radius, answer as each point does alone, bit for bit.
+TEST(MeshGradient, RowsAnswerAsPointsAlone) {
+  Builder b(0.5);
+  const auto leaf = MeshLeaf::load(test::cgal_mesh("bunny00.off"));
+  const double diag = glm::length(leaf->bounds().size());
+  const Tree tree = b.build(b.mesh(leaf, {0.05 * diag}));
+  std::vector<dvec3> pts;
+  for (int row = 0; row < 64; ++row) {
+    const double y = leaf->bounds().lo.y + leaf->bounds().size().y * (row % 8 + 0.5) / 8.0;
+    const double z = leaf->bounds().lo.z + leaf->bounds().size().z * (row / 8 + 0.5) / 8.0;
+    for (int i = 0; i < 64; ++i) pts.push_back({leaf->bounds().lo.x - 0.2 * diag + 0.02 * diag * i, y, z});
+  }
+  const TapeEvaluator& tape = tree.evaluator();
+  std::vector<dvec3> together(pts.size());
+  std::vector<double> values(pts.size());
+  tape.gradient(pts, values, together);
+  std::size_t inside = 0, far = 0;
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    dvec3 alone;
+    double value;
+    tape.gradient(std::span(&pts[i], 1), std::span(&value, 1), std::span(&alone, 1));
+    ASSERT_EQ(values[i], value) << i;  // beyond the radius only the side tells 0 from the plateau
+    ASSERT_EQ(together[i], alone) << i;
+    inside += value > 0.99;
+    far += value == 0.0;
+  }
+  EXPECT_GT(inside, 100u);
+  EXPECT_GT(far, 100u);
 }
 
 }  // namespace
