@@ -137,7 +137,8 @@ class Remesher {
   // Moving `from` onto `to` keeps every surviving triangle around `from` facing as it did.
   bool keeps_faces(TriMesh::VertexHandle from, TriMesh::VertexHandle to) {
     const auto saved = m_.point(from);
-    std::vector<std::pair<TriMesh::FaceHandle, glm::dvec3>> before;
+    auto& before = faces_before_;
+    before.clear();
     for (const auto f : m_.vf_range(from)) before.push_back({f, normal(f)});
     m_.set_point(from, m_.point(to));
     bool good = true;
@@ -157,10 +158,12 @@ class Remesher {
       for (int side = 0; side < 2; ++side) {
         const auto h = m_.halfedge_handle(e, side);
         const auto from = m_.from_vertex_handle(h), to = m_.to_vertex_handle(h);
-        if (locked(from) || !m_.is_collapse_ok(h)) continue;
+        if (locked(from)) continue;
+        // The shapes first: OpenMesh's topological check is the dearest (measured on the bowl:
+        // 8,000 instructions a call, 70% of the collapses' time when it came first).
         bool too_long = false;
         for (const auto w : m_.vv_range(from)) too_long |= glm::length(g(m_.point(w)) - g(m_.point(to))) > 4.0 / 3.0 * L_;
-        if (too_long || !keeps_faces(from, to)) continue;
+        if (too_long || !keeps_faces(from, to) || !m_.is_collapse_ok(h)) continue;
         m_.collapse(h);
         ++done;
         break;
@@ -172,7 +175,7 @@ class Remesher {
   std::size_t flip() {
     std::size_t done = 0;
     for (const auto e : m_.edges()) {
-      if (m_.status(e).deleted() || m_.is_boundary(e) || frozen(e) || !m_.is_flip_ok(e)) continue;
+      if (m_.status(e).deleted() || m_.is_boundary(e) || frozen(e)) continue;
       const auto h = m_.halfedge_handle(e, 0), o = m_.opposite_halfedge_handle(h);
       const auto a = m_.from_vertex_handle(h), b = m_.to_vertex_handle(h);
       const auto c = m_.to_vertex_handle(m_.next_halfedge_handle(h)), d = m_.to_vertex_handle(m_.next_halfedge_handle(o));
@@ -184,7 +187,7 @@ class Remesher {
       };
       const int before = dev(a, 0) + dev(b, 0) + dev(c, 0) + dev(d, 0);
       const int after = dev(a, -1) + dev(b, -1) + dev(c, 1) + dev(d, 1);
-      if (after >= before) continue;
+      if (after >= before || !m_.is_flip_ok(e)) continue;  // OpenMesh's check last: the dearest
       // The two new triangles must face as the old ones did.
       const glm::dvec3 pa = g(m_.point(a)), pb = g(m_.point(b)), pc = g(m_.point(c)), pd = g(m_.point(d));
       const glm::dvec3 up = n1 + n2;
@@ -225,6 +228,7 @@ class Remesher {
   }
 
   TriMesh m_;
+  std::vector<std::pair<TriMesh::FaceHandle, glm::dvec3>> faces_before_;  // keeps_faces' scratch
   OpenMesh::VPropHandleT<bool> locked_;
   OpenMesh::VPropHandleT<std::uint32_t> origin_;
   const TapeEvaluator& field_;
