@@ -39,8 +39,9 @@ struct SnapStats {
 /// normal, or none when it became a crease point. `crease` receives one flag per vertex of the
 /// result. `field` gives the surface's field and gradient (threshold T; the polygonizer passes its
 /// bricks' tapes, meshers/surface_field.hpp), h the cell size. Deterministic: the
-/// clusters are visited in the order of their grid points. Cost: O(n) plus one gradient per
-/// merged vertex.
+/// clusters are visited in the order of their grid points. Cost: O(n) per round plus two
+/// gradients per merged cluster (a cluster on a crease: one, two more when its corner point is
+/// refused).
 void snap_to_grid_points(TriangleMesh& mesh, std::span<const std::uint64_t> near, std::vector<glm::vec3>& normals,
                          std::vector<std::uint8_t>& crease, const BatchGradient& field, double threshold, double h,
                          const SnapOptions& options = {}, SnapStats* stats = nullptr);
