@@ -325,6 +325,20 @@ MeshLeaf::Closest MeshLeaf::far_query(const glm::dvec3& p, double radius) const 
   return best;
 }
 
+// The distance to the previous point's nearest point bounds this one's distance to the mesh. A
+// closed surface does not cross the empty ball of radius r around a point that found no
+// triangle, so a neighbour within half of it that finds none either is on the same side, without
+// casting rays (as for a whole block in shared_far_block).
+MeshLeaf::Closest MeshLeaf::Neighbours::next(const glm::dvec3& p) {
+  const int side = far_side_ >= 0 && glm::length(p - far_at_) <= 0.5 * radius_ ? far_side_ : -1;
+  const Closest c = leaf_.query(p, radius_, have_last_ ? glm::length(p - last_) : kInf, side);
+  have_last_ = std::isfinite(c.distance);
+  if (have_last_) last_ = c.point;
+  far_side_ = !have_last_ && std::isfinite(radius_) ? int(c.inside) : -1;
+  far_at_ = p;
+  return c;
+}
+
 bool MeshLeaf::inside(const glm::dvec3& p) const {
   if (!bounds_.contains(p)) return false;
   if (winding_) return winding_->inside(p);
@@ -340,23 +354,10 @@ bool MeshLeaf::inside(const glm::dvec3& p) const {
 void MeshLeaf::query_batch(const float* xs, const float* ys, const float* zs, std::size_t n, float radius,
                            float* distance, std::uint8_t* inside) const {
   if (n >= 8 && !winding_ && shared_far_block(xs, ys, zs, n, radius, distance, inside)) return;
-  // Each point's search starts from the previous point's nearest point: the points of a block
-  // are neighbours, and the distance to it bounds the distance to the mesh. A point with no
-  // triangle within the radius passes its side on: a closed surface does not cross the empty
-  // ball around it, so a neighbour within half the radius that finds no triangle either is on
-  // the same side, without casting rays (as for a whole block in shared_far_block).
-  glm::dvec3 last(0.0), far_at(0.0);
-  bool have_last = false;
-  int far_side = -1;
-  const double r = static_cast<double>(radius);
+  // The points of a block are neighbours.
+  Neighbours run(*this, static_cast<double>(radius));
   for (std::size_t i = 0; i < n; ++i) {
-    const glm::dvec3 p(xs[i], ys[i], zs[i]);
-    const int side = far_side >= 0 && glm::length(p - far_at) <= 0.5 * r ? far_side : -1;
-    const Closest c = query(p, r, have_last ? glm::length(p - last) : kInf, side);
-    have_last = std::isfinite(c.distance);
-    if (have_last) last = c.point;
-    far_side = !have_last && std::isfinite(r) ? int(c.inside) : -1;
-    far_at = p;
+    const Closest c = run.next(glm::dvec3(xs[i], ys[i], zs[i]));
     distance[i] =
         std::isfinite(c.distance) ? static_cast<float>(c.distance) : std::numeric_limits<float>::infinity();
     inside[i] = c.inside ? 1 : 0;

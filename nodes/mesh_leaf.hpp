@@ -102,6 +102,22 @@ class MeshLeaf {
   /// does not cross the empty ball around it); it spares the rays, and a winding leaf ignores it.
   Closest query(const glm::dvec3& p, double radius, double bound = std::numeric_limits<double>::infinity(),
                 int side_if_none = -1) const;
+  /// query() over a run of neighbouring points taken in order (a block's, a brick's): each
+  /// point's search is bounded by the previous point's nearest point, and a point that finds no
+  /// triangle within the radius passes its side to the next within half the radius. Answers are
+  /// query(p, radius)'s, bit for bit. Holds a reference to the leaf; one per thread and run.
+  class Neighbours {
+   public:
+    Neighbours(const MeshLeaf& leaf, double radius) : leaf_(leaf), radius_(radius) {}
+    Closest next(const glm::dvec3& p);
+
+   private:
+    const MeshLeaf& leaf_;
+    double radius_;
+    glm::dvec3 last_{0.0}, far_at_{0.0};  // the previous point's nearest point; the previous point
+    bool have_last_ = false;
+    int far_side_ = -1;  // the previous point's side when it found no triangle, else -1
+  };
   /// Inside test alone.
   bool inside(const glm::dvec3& p) const;
   /// For a winding leaf: +1 when every point of the box is inside, 0 when none is, -1 when that

@@ -4,7 +4,6 @@
 #include "runtime/morton.hpp"
 #include "runtime/tape_ops.hpp"
 
-#include <glm/geometric.hpp>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -231,21 +230,10 @@ void mesh_loop(const Tape& tape, const Block<Dual>& b, const Instruction& ins, c
   const Dual* y = b.axis(ins.a, 1);
   const Dual* z = b.axis(ins.a, 2);
   Dual* out = b.reg(ins.out);
-  // As MeshLeaf::query_batch: the previous point's nearest point bounds this one's search, and a
-  // point with no triangle within the radius passes its side to a neighbour within half of it.
-  glm::dvec3 last(0.0), far_at(0.0);
-  bool have_last = false;
-  int far_side = -1;
-  const double r = static_cast<double>(radius);
+  MeshLeaf::Neighbours run(leaf, static_cast<double>(radius));  // a block's points are neighbours
   for (int i = 0; i < n; ++i) {
     const glm::dvec3 p(x[i].v, y[i].v, z[i].v);
-    const int side = far_side >= 0 && glm::length(p - far_at) <= 0.5 * r ? far_side : -1;
-    const MeshLeaf::Closest c =
-        leaf.query(p, r, have_last ? glm::length(p - last) : std::numeric_limits<double>::infinity(), side);
-    have_last = std::isfinite(c.distance);
-    if (have_last) last = c.point;
-    far_side = !have_last && std::isfinite(r) ? int(c.inside) : -1;
-    far_at = p;
+    const MeshLeaf::Closest c = run.next(p);
     const float dm = std::isfinite(c.distance) ? static_cast<float>(c.distance) : std::numeric_limits<float>::infinity();
     const float d = pseudo_distance(dm, c.inside, r0);
     if (!(d < kernel) || d == 0.0f || !std::isfinite(dm)) {
