@@ -76,6 +76,8 @@ struct Scratch {
   std::vector<std::size_t> order, unique;
   std::vector<glm::dvec3> pa, pb;
   std::vector<double> fa, fb, t, span, ta, tb;
+  std::vector<std::uint8_t> probed;     // a value exactly T was probed past once
+  std::vector<double> slope;             // the field's slope along each edge at its first guess (NaN: unknown)
   std::vector<float> xs, ys, zs, fv;
   std::vector<std::uint32_t> live;
   std::vector<std::int8_t> side;
@@ -96,7 +98,8 @@ void march(const Grid& grid, glm::ivec3 b, const std::uint8_t* label, Scratch& s
 
 /// One vertex per distinct edge of march(): false position along the edge on `eval` (the
 /// brick's tape) from the brick's samples `own`, threshold T; fills out.vertices, sorted by key.
-void place_vertices(const Grid& grid, glm::ivec3 b, std::uint32_t brick_index, const float* own,
+/// Returns the number of field values it evaluated.
+std::size_t place_vertices(const Grid& grid, glm::ivec3 b, std::uint32_t brick_index, const float* own,
                     const std::uint8_t* label, const TapeEvaluator& eval, double T, const Refine& refine,
                     Scratch& scratch, BrickOutput& out);
 

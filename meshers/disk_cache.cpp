@@ -36,16 +36,16 @@ static_assert(std::endian::native == std::endian::little, "cache files are littl
 static_assert(sizeof(glm::dvec3) == 24 && sizeof(glm::uvec3) == 12, "positions and triangles are stored as arrays");
 // A new report or statistics field must be stored by the field lists below (and
 // kDiskCacheLayout bumped): these trip when one is added.
-static_assert(sizeof(PolygonizeStats) == 320, "store the new PolygonizeStats field in meshers/disk_cache.cpp");
-static_assert(sizeof(LocalStats) == 472, "store the new LocalStats field in meshers/disk_cache.cpp");
-static_assert(sizeof(NodeReport) == 904, "store the new NodeReport field in meshers/disk_cache.cpp");
+static_assert(sizeof(PolygonizeStats) == 328, "store the new PolygonizeStats field in meshers/disk_cache.cpp");
+static_assert(sizeof(LocalStats) == 480, "store the new LocalStats field in meshers/disk_cache.cpp");
+static_assert(sizeof(NodeReport) == 920, "store the new NodeReport field in meshers/disk_cache.cpp");
 
 // The field lists: one per struct, read and written through the same list (Io is Writer or
 // Reader; S is const for the writer).
 template <class Io, class S>
 void polygonize_fields(Io& io, S& p) {
   io(p.bricks_total, p.bricks_active, p.points_evaluated, p.crease_edges, p.corner_vertices, p.crease_candidates,
-     p.crease_spread, p.crease_intersections, p.quality_intersections, p.bricks_reused);
+     p.crease_spread, p.crease_intersections, p.quality_intersections, p.bricks_reused, p.refine_evaluations);
   io(p.unfold.pairs_before, p.unfold.pairs_after, p.unfold.collapses, p.unfold.rounds, p.unfold.seconds);
   io(p.snap.merged_vertices, p.snap.removed_triangles, p.snap.skipped_points, p.snap.crease_points);
   io(p.quality.collapses, p.quality.flips, p.quality.splits, p.quality.moved, p.quality.reverted, p.quality.skipped,

@@ -43,7 +43,8 @@ nlohmann::json node_json(const Graph& g, const NodeReport& e) {
   if (!e.refinements.empty()) n["refinements"] = e.refinements;
   if (e.polygonized) {
     n["bricks"] = {{"total", e.polygonize.bricks_total}, {"active", e.polygonize.bricks_active},
-                   {"reused", e.polygonize.bricks_reused}, {"points_evaluated", e.polygonize.points_evaluated}};
+                   {"reused", e.polygonize.bricks_reused}, {"points_evaluated", e.polygonize.points_evaluated},
+                   {"refine_evaluations", e.polygonize.refine_evaluations}};
     n["quality"] = {{"collapses", e.polygonize.quality.collapses}, {"flips", e.polygonize.quality.flips},
                     {"moved", e.polygonize.quality.moved}, {"pieces", e.polygonize.quality.pieces},
                     {"pieces_reused", e.polygonize.quality.pieces_reused}, {"retries", e.polygonize.quality.retries},
@@ -76,6 +77,7 @@ PolygonizeStats total_polygonize(const MeshResult& r) {
     s.bricks_active += p.bricks_active;
     s.bricks_reused += p.bricks_reused;
     s.points_evaluated += p.points_evaluated;
+    s.refine_evaluations += p.refine_evaluations;
     s.crease_edges += p.crease_edges;
     s.corner_vertices += p.corner_vertices;
     s.crease_candidates += p.crease_candidates;

@@ -392,7 +392,7 @@ TriangleMesh polygonize(std::shared_ptr<const Graph> graph, NodeId root, double 
   t0 = std::chrono::steady_clock::now();
   std::vector<float> values(active.size() * kBrickPoints);
   std::vector<std::shared_ptr<const Tape>> tapes(active.size());
-  std::atomic<std::size_t> done{0}, evaluated{0};
+  std::atomic<std::size_t> done{0}, evaluated{0}, refined{0};
   auto report = [&](double base, double span) {
     const std::size_t d = ++done;
     if (options.progress && tbb::this_task_arena::current_thread_index() == 0 &&
@@ -539,8 +539,8 @@ TriangleMesh polygonize(std::shared_ptr<const Graph> graph, NodeId root, double 
     brick::Scratch& sc = scratch.local();
     brick::march(grid, b, label, sc, out);
     const TapeEvaluator eval(tapes[a]);
-    brick::place_vertices(grid, b, active[a], own, label, eval, T, {options.refine_steps, options.refine_tolerance}, sc,
-                          out);
+    refined += brick::place_vertices(grid, b, active[a], own, label, eval, T,
+                                     {options.refine_steps, options.refine_tolerance}, sc, out);
     // Exact normals for the vertices of cells that may hold a crease (meshers/features.hpp).
     if (options.sharp_features && may_have_creases(*tapes[a])) brick::crease_normals(own, eval, options.features, sc, out);
     if (!keys.empty())
@@ -551,6 +551,7 @@ TriangleMesh polygonize(std::shared_ptr<const Graph> graph, NodeId root, double 
     report(0.6, 0.3);
   });
   stats.seconds_extract = seconds_since(t0);
+  stats.refine_evaluations = refined.load();
   if (cancelled()) throw MeshCancelled("meshing was cancelled");
   if (reaches_boundary && !clipped)
     throw PolygonizeError("the solid reaches the edge of its own bounds: it is unbounded (a blend over R-function differences?)");

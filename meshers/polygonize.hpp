@@ -75,6 +75,10 @@ struct PolygonizeStats {
   std::size_t bricks_total = 0, bricks_active = 0;
   std::size_t bricks_reused = 0;  ///< active bricks taken from PolygonizeOptions::pieces
   std::size_t points_evaluated = 0;
+  /// Field values the vertices' placement took (false position along the crossing edges, from a
+  /// cubic's guess where a brick holds four values on the edge's line); bricks taken from
+  /// `pieces` add none.
+  std::size_t refine_evaluations = 0;
   std::size_t crease_edges = 0, corner_vertices = 0;  ///< sharp features (meshers/features.hpp)
   std::size_t crease_candidates = 0, crease_spread = 0;  ///< CreaseStats::candidate_edges, spread_edges
   std::size_t crease_intersections = 0;  ///< intersecting pairs left where the crease step ran (after unfolding)
