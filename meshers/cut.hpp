@@ -34,6 +34,7 @@ struct CutOptions {
 struct CutStats {
   std::size_t kept_vertices = 0, new_vertices = 0, snapped_vertices = 0;
   std::size_t kept_triangles = 0, clipped_triangles = 0, dropped_triangles = 0;
+  std::size_t root_evaluations = 0;  ///< values of c the crossing edges' roots took (all attempts)
 };
 
 /// The part of `mesh` where c < 0. `mesh` should be an oriented manifold (closed or not); the

@@ -1,0 +1,79 @@
+// Cutting a mesh along a level set (meshers/cut.hpp): the kept part, its roots on the crossing
+// edges within the tolerance, found in few values of the cut function, and the snap that puts
+// near vertices on the cut without searching the other roots again.
+#include "meshers/cut.hpp"
+#include "meshers/mesh_checks.hpp"
+#include "meshers/polygonize.hpp"
+#include "runtime/builder.hpp"
+
+#include <glm/geometric.hpp>
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <cmath>
+
+using namespace ht;
+
+namespace {
+
+// A sphere of radius about 0.36 (a point primitive), meshed at h.
+TriangleMesh sphere(double h) {
+  Builder b(0.5);
+  const Tree t = b.build(b.point({0, 0, 0}, {0.8}));
+  PolygonizeOptions o;
+  o.precision = h;
+  return polygonize(t.graph_ptr(), t.root(), 0.5, o);
+}
+
+// The tail of a compact kernel around q, less a small level: like a blend's cut, flat and curved
+// where it crosses (a cubic in the distance to its support's rim), the hard case for false position.
+double tail(const glm::dvec3& p) {
+  const double u = 1.0 - glm::dot(p - glm::dvec3(0.3, 0.1, 0.0), p - glm::dvec3(0.3, 0.1, 0.0)) / (0.6 * 0.6);
+  return (u > 0 ? u * u * u : 0.0) - 0.01;
+}
+
+}  // namespace
+
+TEST(Cut, RootsMeetTheToleranceInFewValues) {
+  const TriangleMesh m = sphere(0.02);
+  std::atomic<std::size_t> calls{0};
+  const BatchField c = [&calls](std::span<const glm::dvec3> points, std::span<double> values) {
+    ++calls;
+    for (std::size_t i = 0; i < points.size(); ++i) values[i] = -tail(points[i]);  // kept: inside the kernel's reach
+  };
+  CutOptions o;
+  o.snap_distance = 0.0;  // every crossing edge gets a root vertex
+  CutStats st;
+  const TriangleMesh kept = cut_mesh(m, c, o, &st);
+  ASSERT_GT(st.new_vertices, 100u);
+  EXPECT_GT(calls.load(), 1u);
+  // Illinois on such a tail takes four to five values an edge; halving the kept end's weight at
+  // every step took eleven.
+  EXPECT_LE(double(st.root_evaluations), 6.0 * double(st.new_vertices));
+  // Each root within the tolerance: |c| at most 1e-4 of c's change along its edge, or the
+  // bracket 1e-4 of the edge; the tail's slope is below 10, the edges below 0.05.
+  EXPECT_EQ(check_mesh(kept).nonmanifold_edges, 0u);
+  std::size_t on_cut = 0;
+  for (const glm::dvec3& p : kept.positions) on_cut += std::abs(tail(p)) <= 1e-4;
+  EXPECT_GE(on_cut, st.new_vertices);
+}
+
+// Snapping puts the vertices next to the cut on it; the edges that still cross keep their ends
+// and values, so their roots are those found before the snap: the cut takes no more values of c
+// with snapping than without.
+TEST(Cut, SnappingSearchesNoRootTwice) {
+  const TriangleMesh m = sphere(0.02);
+  const BatchField c = [](std::span<const glm::dvec3> points, std::span<double> values) {
+    for (std::size_t i = 0; i < points.size(); ++i) values[i] = -tail(points[i]);
+  };
+  CutOptions snapping, plain;
+  snapping.snap_distance = 0.004;
+  plain.snap_distance = 0.0;
+  CutStats with, without;
+  const TriangleMesh a = cut_mesh(m, c, snapping, &with);
+  const TriangleMesh b = cut_mesh(m, c, plain, &without);
+  ASSERT_GT(with.snapped_vertices, 0u);
+  EXPECT_EQ(with.root_evaluations, without.root_evaluations);
+  EXPECT_TRUE(check_mesh(a).manifold());
+  EXPECT_LT(a.positions.size(), b.positions.size());
+}
