@@ -8,9 +8,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <numeric>
 
 namespace ht {
 namespace {
+
+constexpr double kSettled = 1e-3;  // of a ring's mean edge: a Newton step this short is the last
 
 // The neighbours of the chosen vertices only (one scan of the triangles, no sort of the
 // whole mesh): rows in the order of `chosen`.
@@ -202,26 +205,42 @@ void relax_vertices(TriangleMesh& mesh, std::span<const std::uint8_t> movable, c
     if (movable[v]) moving.push_back(v);
   if (moving.empty()) return;
   const Neighbours n = neighbours_of(mesh, moving);
-  std::vector<glm::dvec3> at(moving.size()), grad(moving.size());
-  std::vector<double> value(moving.size());
+  std::vector<glm::dvec3> at(moving.size()), grad(moving.size()), pts;
+  std::vector<double> value(moving.size()), settled(moving.size());
+  std::vector<std::uint32_t> who;
   for (int it = 0; it < o.iterations; ++it) {
     for (std::size_t i = 0; i < moving.size(); ++i) at[i] = mesh.positions[moving[i]];
     field.gradient(at, {}, grad);
     for (std::size_t i = 0; i < moving.size(); ++i) {
       glm::dvec3 c(0.0);
-      for (std::uint32_t k = n.begin[i]; k < n.begin[i + 1]; ++k) c += mesh.positions[n.list[k]];
-      c /= double(std::max<std::uint32_t>(1, n.begin[i + 1] - n.begin[i]));
+      double ring = 0.0;
+      for (std::uint32_t k = n.begin[i]; k < n.begin[i + 1]; ++k)
+        c += mesh.positions[n.list[k]], ring += glm::length(mesh.positions[n.list[k]] - at[i]);
+      const double count = double(std::max<std::uint32_t>(1, n.begin[i + 1] - n.begin[i]));
+      c /= count;
+      settled[i] = kSettled * ring / count;
       const double len = glm::length(grad[i]);
       glm::dvec3 d = c - at[i];
       if (len > 0 && std::isfinite(len)) d -= glm::dot(d, grad[i] / len) * (grad[i] / len);
       at[i] += d;
     }
-    for (int s = 0; s < o.newton_steps; ++s) {
-      field.gradient(at, value, grad);
-      for (std::size_t i = 0; i < moving.size(); ++i) {
-        const double g2 = glm::dot(grad[i], grad[i]);
-        if (g2 > 0 && std::isfinite(g2)) at[i] -= (value[i] - T) / g2 * grad[i];
+    // Newton steps; a point whose step was shorter than kSettled of its ring's mean edge takes
+    // no more (the next would be about the curvature times that step squared).
+    who.resize(moving.size());
+    std::iota(who.begin(), who.end(), 0u);
+    for (int s = 0; s < o.newton_steps && !who.empty(); ++s) {
+      pts.resize(who.size());
+      for (std::size_t k = 0; k < who.size(); ++k) pts[k] = at[who[k]];
+      field.gradient(pts, std::span(value).first(who.size()), std::span(grad).first(who.size()));
+      std::size_t kept = 0;
+      for (std::size_t k = 0; k < who.size(); ++k) {
+        const double g2 = glm::dot(grad[k], grad[k]);
+        if (!(g2 > 0 && std::isfinite(g2))) continue;
+        const double step = (value[k] - T) / g2;
+        at[who[k]] -= step * grad[k];
+        if (std::abs(step) * std::sqrt(g2) > settled[who[k]]) who[kept++] = who[k];
       }
+      who.resize(kept);
     }
     for (std::size_t i = 0; i < moving.size(); ++i) mesh.positions[moving[i]] = at[i];
   }
