@@ -59,8 +59,9 @@ std::shared_ptr<const MeshLeaf> deform_child_mesh(const std::shared_ptr<const Gr
     unfold(mesh, no_crease, pairs, kUnfoldRounds);
   }
   try {
+    // `pairs` now holds every intersecting pair left; with none, MeshLeaf need not search again.
     return MeshLeaf::from_triangles(std::move(mesh.positions), std::move(mesh.triangles),
-                                    "deformed mesh of ffd node " + g.label(n));
+                                    "deformed mesh of ffd node " + g.label(n), false, MeshInside::Closed, pairs.empty());
   } catch (const MeshError& e) {
     throw PolygonizeError(e.what());
   }

@@ -189,7 +189,7 @@ void fill_holes(const std::string& name, std::vector<glm::dvec3>& pos, std::vect
 
 std::shared_ptr<const MeshLeaf> MeshLeaf::from_triangles(std::vector<glm::dvec3> positions,
                                                          std::vector<glm::uvec3> triangles, std::string name,
-                                                         bool repair, MeshInside inside) {
+                                                         bool repair, MeshInside inside, bool intersection_free) {
   for (std::size_t f = 0; f < triangles.size(); ++f) {
     const glm::uvec3& t = triangles[f];
     const std::string where = "face " + std::to_string(f);
@@ -201,7 +201,7 @@ std::shared_ptr<const MeshLeaf> MeshLeaf::from_triangles(std::vector<glm::dvec3>
       fail(name, where + " repeats vertex " + std::to_string(t[0] == t[1] || t[0] == t[2] ? t[0] : t[1]));
   }
   const std::size_t faces = triangles.size();
-  return build(std::move(positions), std::move(triangles), faces, std::move(name), repair, inside);
+  return build(std::move(positions), std::move(triangles), faces, std::move(name), repair, inside, intersection_free);
 }
 
 namespace {
@@ -359,7 +359,8 @@ void orient_outward(const Accel& accel, const std::vector<glm::dvec3>& positions
 
 std::shared_ptr<MeshLeaf> MeshLeaf::build(std::vector<glm::dvec3> positions,
                                                 std::vector<glm::uvec3> triangles, std::size_t input_faces,
-                                                std::string name, bool repair, MeshInside inside) {
+                                                std::string name, bool repair, MeshInside inside,
+                                                bool intersection_free) {
   for (std::size_t v = 0; v < positions.size(); ++v)
     if (!std::isfinite(positions[v].x) || !std::isfinite(positions[v].y) || !std::isfinite(positions[v].z))
       fail(name, "vertex " + std::to_string(v) + " has a non-finite coordinate");
@@ -393,7 +394,9 @@ std::shared_ptr<MeshLeaf> MeshLeaf::build(std::vector<glm::dvec3> positions,
     flipped.resize(triangles.size(), 0);
     shells = orient_shells(name, triangles, topo, flipped);
   }
-  if (!winding) check_crossing_shells(name, positions, triangles, shells, report);
+  // Holes closed above add triangles nobody searched.
+  if (!winding && !(intersection_free && report.triangles_added == 0))
+    check_crossing_shells(name, positions, triangles, shells, report);
 
   leaf->accel_ = std::make_unique<Accel>(name, positions, triangles, shells);
   Aabb box;

@@ -73,11 +73,14 @@ class MeshLeaf {
                                               MeshInside inside = MeshInside::Closed);
 
   /// The same validation on triangles given in memory (tests, and the ffd node's deformed mesh).
-  /// `name` is used in error messages.
+  /// `name` is used in error messages. `intersection_free`: the caller has searched the triangles
+  /// and no two intersect (the ffd node does, to unfold its folds), so the search for crossing
+  /// shells, which would find nothing, is not made again.
   static std::shared_ptr<const MeshLeaf> from_triangles(std::vector<glm::dvec3> positions,
                                                         std::vector<glm::uvec3> triangles,
                                                         std::string name, bool repair = false,
-                                                        MeshInside inside = MeshInside::Closed);
+                                                        MeshInside inside = MeshInside::Closed,
+                                                        bool intersection_free = false);
   ~MeshLeaf();
   MeshLeaf(const MeshLeaf&) = delete;
   MeshLeaf& operator=(const MeshLeaf&) = delete;
@@ -162,7 +165,8 @@ class MeshLeaf {
   /// Validation, orientation, repair and acceleration shared by load() and from_triangles().
   static std::shared_ptr<MeshLeaf> build(std::vector<glm::dvec3> positions,
                                                std::vector<glm::uvec3> triangles, std::size_t input_faces,
-                                               std::string name, bool repair, MeshInside inside);
+                                               std::string name, bool repair, MeshInside inside,
+                                               bool intersection_free = false);
   /// query_batch's shared answer for a block the surface's radius does not reach; false when it
   /// does (then every point is queried).
   bool shared_far_block(const float* xs, const float* ys, const float* zs, std::size_t n, float radius,

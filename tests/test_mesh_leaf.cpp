@@ -499,6 +499,28 @@ TEST(MeshOrientation, NestedShellBoundsACavity) {
   EXPECT_TRUE(pair->inside(glm::dvec3(3.0, 0.1, 0.0)));
 }
 
+// A caller that has searched the triangles itself (the ffd node, before unfolding its folds)
+// says so, and the crossing-shells search is not made again: the leaf answers the same, bit for
+// bit; and the search is indeed skipped (crossing shells given as intersection-free are taken on
+// the caller's word, where without the flag they are refused).
+TEST(MeshOrientation, IntersectionFreeSkipsOnlyTheShellSearch) {
+  const Soup apart = merged(sphere(glm::dvec3(0.0), 1.0), sphere(glm::dvec3(3.0, 0.0, 0.0), 1.0));
+  const auto searched = MeshLeaf::from_triangles(apart.positions, apart.triangles, "searched");
+  const auto vouched = MeshLeaf::from_triangles(apart.positions, apart.triangles, "vouched", false, MeshInside::Closed, true);
+  EXPECT_EQ(vouched->report().components, searched->report().components);
+  Rng rng = seeded();
+  std::uniform_real_distribution<double> u(-1.5, 4.5);
+  for (int i = 0; i < 2000; ++i) {
+    const glm::dvec3 p(u(rng), 0.5 * u(rng) - 0.75, 0.5 * u(rng) - 0.75);
+    const MeshLeaf::Closest a = searched->query(p, 0.5), b = vouched->query(p, 0.5);
+    ASSERT_EQ(a.inside, b.inside);
+    ASSERT_TRUE(a.distance == b.distance || (std::isinf(a.distance) && std::isinf(b.distance)));
+  }
+  const Soup crossing = merged(sphere(glm::dvec3(0.0), 1.0), sphere(glm::dvec3(1.0, 0.0, 0.0), 1.0));
+  EXPECT_THROW(MeshLeaf::from_triangles(crossing.positions, crossing.triangles, "crossing"), MeshError);
+  EXPECT_NO_THROW(MeshLeaf::from_triangles(crossing.positions, crossing.triangles, "crossing", false, MeshInside::Closed, true));
+}
+
 TEST(MeshOrientation, ShellsTouchingAtAVertex) {
   // Two tetrahedra meeting tip to tip: edges are manifold but the shared vertex is not. It is
   // accepted; OpenMesh's form duplicates the vertex, and near it the inside test still agrees
