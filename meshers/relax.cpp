@@ -198,6 +198,28 @@ std::vector<std::uint8_t> rings_around(const TriangleMesh& mesh, std::span<const
   return out;
 }
 
+void newton_onto(std::vector<glm::dvec3>& at, const TapeEvaluator& field, double T, int steps,
+                 std::span<const double> settled) {
+  std::vector<std::uint32_t> who(at.size());
+  std::iota(who.begin(), who.end(), 0u);
+  std::vector<glm::dvec3> pts, grad;
+  std::vector<double> value;
+  for (int s = 0; s < steps && !who.empty(); ++s) {
+    pts.resize(who.size()), grad.resize(who.size()), value.resize(who.size());
+    for (std::size_t k = 0; k < who.size(); ++k) pts[k] = at[who[k]];
+    field.gradient(pts, value, grad);
+    std::size_t kept = 0;
+    for (std::size_t k = 0; k < who.size(); ++k) {
+      const double g2 = glm::dot(grad[k], grad[k]);
+      if (!(g2 > 0 && std::isfinite(g2))) continue;
+      const double step = (value[k] - T) / g2;
+      at[who[k]] -= step * grad[k];
+      if (std::abs(step) * std::sqrt(g2) > settled[who[k]]) who[kept++] = who[k];
+    }
+    who.resize(kept);
+  }
+}
+
 void relax_vertices(TriangleMesh& mesh, std::span<const std::uint8_t> movable, const TapeEvaluator& field, double T,
                     const RelaxOptions& o) {
   std::vector<std::uint32_t> moving;
@@ -205,9 +227,8 @@ void relax_vertices(TriangleMesh& mesh, std::span<const std::uint8_t> movable, c
     if (movable[v]) moving.push_back(v);
   if (moving.empty()) return;
   const Neighbours n = neighbours_of(mesh, moving);
-  std::vector<glm::dvec3> at(moving.size()), grad(moving.size()), pts;
-  std::vector<double> value(moving.size()), settled(moving.size());
-  std::vector<std::uint32_t> who;
+  std::vector<glm::dvec3> at(moving.size()), grad(moving.size());
+  std::vector<double> settled(moving.size());
   for (int it = 0; it < o.iterations; ++it) {
     for (std::size_t i = 0; i < moving.size(); ++i) at[i] = mesh.positions[moving[i]];
     field.gradient(at, {}, grad);
@@ -224,24 +245,8 @@ void relax_vertices(TriangleMesh& mesh, std::span<const std::uint8_t> movable, c
       if (len > 0 && std::isfinite(len)) d -= glm::dot(d, grad[i] / len) * (grad[i] / len);
       at[i] += d;
     }
-    // Newton steps; a point whose step was shorter than kSettled of its ring's mean edge takes
-    // no more (the next would be about the curvature times that step squared).
-    who.resize(moving.size());
-    std::iota(who.begin(), who.end(), 0u);
-    for (int s = 0; s < o.newton_steps && !who.empty(); ++s) {
-      pts.resize(who.size());
-      for (std::size_t k = 0; k < who.size(); ++k) pts[k] = at[who[k]];
-      field.gradient(pts, std::span(value).first(who.size()), std::span(grad).first(who.size()));
-      std::size_t kept = 0;
-      for (std::size_t k = 0; k < who.size(); ++k) {
-        const double g2 = glm::dot(grad[k], grad[k]);
-        if (!(g2 > 0 && std::isfinite(g2))) continue;
-        const double step = (value[k] - T) / g2;
-        at[who[k]] -= step * grad[k];
-        if (std::abs(step) * std::sqrt(g2) > settled[who[k]]) who[kept++] = who[k];
-      }
-      who.resize(kept);
-    }
+    // Newton steps until a point's step is under kSettled of its ring's mean edge.
+    newton_onto(at, field, T, o.newton_steps, settled);
     for (std::size_t i = 0; i < moving.size(); ++i) mesh.positions[moving[i]] = at[i];
   }
 }

@@ -29,6 +29,12 @@ struct RelaxOptions {
 void relax_vertices(TriangleMesh& mesh, std::span<const std::uint8_t> movable, const TapeEvaluator& field, double threshold,
                     const RelaxOptions& options = {});
 
+/// Newton steps onto {f = T} along the gradient, at most `steps`: a point whose step was no longer
+/// than settled[i] (world units) takes no more, the next being about the curvature times that
+/// step squared.
+void newton_onto(std::vector<glm::dvec3>& at, const TapeEvaluator& field, double threshold, int steps,
+                 std::span<const double> settled);
+
 /// Straightens every boundary loop of `mesh`: each loop vertex moves halfway toward the midpoint
 /// of its two loop neighbours, then back onto {f = T}; the vertices one ring inside follow by
 /// tangential relaxation, so the loop's own triangles do not fold.
