@@ -60,10 +60,20 @@ double taper_scale(const double* s, double h) {
 double sinc(double t) { return std::abs(t) < 1e-4 ? 1.0 - t * t / 6.0 : std::sin(t) / t; }
 double cosc(double t) { return std::abs(t) < 1e-4 ? t / 2.0 - t * t * t / 24.0 : (1.0 - std::cos(t)) / t; }
 
-double bernstein(int n, int i, double t) {
-  double binom = 1.0;
-  for (int k = 1; k <= i; ++k) binom = binom * (n - i + k) / k;
-  return binom * std::pow(t, i) * std::pow(1.0 - t, n - i);
+// The n + 1 Bernstein polynomials of degree n at t, into b[0..n]: powers by products (std::pow
+// for each of them cost as much as the rest of the deformation).
+void bernstein_basis(int n, double t, double* b) {
+  double up = 1.0;  // t^i
+  for (int i = 0; i <= n; ++i) b[i] = up, up *= t;
+  double down = 1.0, binom = 1.0;  // (1 - t)^(n - i), C(n, i)
+  for (int i = n; i >= 0; --i) {
+    b[i] *= down;
+    down *= 1.0 - t;
+  }
+  for (int i = 0; i <= n; ++i) {
+    b[i] *= binom;
+    binom = binom * (n - i) / (i + 1);
+  }
 }
 
 // The frame only permutes and translates coordinates, so boxes map to boxes.
@@ -148,13 +158,17 @@ glm::dvec3 warp_forward(NodeKind kind, const double* s, const glm::dvec3& p) {
       const int dims[3] = {static_cast<int>(s[6]), static_cast<int>(s[7]), static_cast<int>(s[8])};
       const glm::dvec3 t = (p - lo) / (hi - lo);
       const double* pts = s + kFfdHeader;
+      double bx[kFfdMaxDim + 1], by[kFfdMaxDim + 1], bz[kFfdMaxDim + 1];
+      bernstein_basis(dims[0], t.x, bx);
+      bernstein_basis(dims[1], t.y, by);
+      bernstein_basis(dims[2], t.z, bz);
       glm::dvec3 out(0.0);
       for (int k = 0; k <= dims[2]; ++k) {
-        const double bk = bernstein(dims[2], k, t.z);
+        const double bk = bz[k];
         for (int j = 0; j <= dims[1]; ++j) {
-          const double bj = bk * bernstein(dims[1], j, t.y);
+          const double bj = bk * by[j];
           for (int i = 0; i <= dims[0]; ++i) {
-            const double w = bj * bernstein(dims[0], i, t.x);
+            const double w = bj * bx[i];
             const int idx = 3 * (i + (dims[0] + 1) * (j + (dims[1] + 1) * k));
             out += w * glm::dvec3(pts[idx], pts[idx + 1], pts[idx + 2]);
           }

@@ -26,6 +26,9 @@ inline constexpr int kTwistParams = 5;
 inline constexpr int kTaperParams = 8;
 inline constexpr int kBendParams = 7;
 inline constexpr int kFfdHeader = 11;
+/// An ffd lattice has at most this many intervals along each axis (the scene format and the
+/// builder refuse more; the deformation keeps one Bernstein basis an axis on the stack).
+inline constexpr int kFfdMaxDim = 64;
 
 /// w(p) for affine, twist, taper, bend and ffd.
 glm::dvec3 warp_forward(NodeKind kind, const double* params, const glm::dvec3& p);

@@ -255,7 +255,7 @@ NodeId Builder::ffd(NodeId child, glm::dvec3 lo, glm::dvec3 hi, glm::ivec3 dims,
                     std::span<const glm::dvec3> points, Falloff f) {
   if (child >= writer_.size()) throw BuildError("child", "is not a node of this builder");
   check_box(lo, hi);
-  if (dims.x < 1 || dims.y < 1 || dims.z < 1 || dims.x > 64 || dims.y > 64 || dims.z > 64)
+  if (dims.x < 1 || dims.y < 1 || dims.z < 1 || dims.x > kFfdMaxDim || dims.y > kFfdMaxDim || dims.z > kFfdMaxDim)
     throw BuildError("dims", "must be three whole numbers from 1 to 64");
   const std::size_t expected = std::size_t(dims.x + 1) * std::size_t(dims.y + 1) * std::size_t(dims.z + 1);
   if (points.size() != expected)

@@ -3,6 +3,7 @@
 // SceneError "source: json.path: rule".
 #include "runtime/scene.hpp"
 
+#include "nodes/warps.hpp"
 #include "runtime/builder.hpp"
 
 #include <glm/gtc/matrix_transform.hpp>
@@ -294,7 +295,7 @@ class Loader {
       glm::ivec3 dims;
       for (int i = 0; i < 3; ++i) {
         const double v = Obj::as_number(d[std::size_t(i)], o.at("dims") + "[" + std::to_string(i) + "]");
-        if (v != std::floor(v) || v < 1 || v > 64)
+        if (v != std::floor(v) || v < 1 || v > kFfdMaxDim)
           throw Fail{o.at("dims") + "[" + std::to_string(i) + "]", "must be a whole number from 1 to 64"};
         dims[i] = static_cast<int>(v);
       }

@@ -98,3 +98,42 @@ TEST(Ffd, PointsOutsideTheLatticeDoNotMove) {
   EXPECT_EQ(warp_forward(NodeKind::Ffd, prm, dvec3(-0.5, 0.3, 2.0)), dvec3(-0.5, 0.3, 2.0));
   EXPECT_NEAR(glm::length(warp_forward(NodeKind::Ffd, prm, dvec3(1, 1, 1)) - dvec3(1.5, 1.5, 1.5)), 0.0, 1e-12);
 }
+
+// The deformation is the trivariate Bernstein polynomial of the lattice: checked against de
+// Casteljau's algorithm (repeated linear interpolation, no powers or binomials) on random lattices
+// of every size up to the format's limit, where large binomials and high powers would show.
+TEST(Ffd, DeformationIsDeCasteljauOfTheLattice) {
+  test::Rng rng = test::seeded();
+  std::uniform_real_distribution<double> unit(0.0, 1.0);
+  auto casteljau = [](std::vector<dvec3> q, double t) {
+    for (std::size_t n = q.size(); n > 1; --n)
+      for (std::size_t i = 0; i + 1 < n; ++i) q[i] = (1.0 - t) * q[i] + t * q[i + 1];
+    return q[0];
+  };
+  const glm::ivec3 sizes[] = {{1, 1, 1}, {3, 2, 5}, {8, 2, 2}, {kFfdMaxDim, 1, 2}, {2, kFfdMaxDim, 1}, {1, 3, kFfdMaxDim}};
+  for (const glm::ivec3 dims : sizes) {
+    Builder b(kT);
+    const dvec3 lo(-1.0, -0.5, 0.0), hi(1.0, 0.5, 2.0);
+    auto pts = linear_lattice(lo, hi, dims, {1, 1, 1});
+    for (dvec3& p : pts) p += 0.2 * test::random_point(rng, 1.0);
+    const NodeId f = b.ffd(b.point({0, 0, 0}, {0.5}), lo, hi, dims, pts, {0.1});
+    const Tree t = b.build(f);
+    const double* prm = t.graph().params_of(f).data();
+    for (int trial = 0; trial < 20; ++trial) {
+      const dvec3 u(unit(rng), unit(rng), unit(rng));
+      // Along x first, then y, then z, as the points are stored.
+      std::vector<dvec3> in_z;
+      for (int k = 0; k <= dims.z; ++k) {
+        std::vector<dvec3> in_y;
+        for (int j = 0; j <= dims.y; ++j) {
+          const auto row = pts.begin() + (dims.x + 1) * (j + (dims.y + 1) * k);
+          in_y.push_back(casteljau(std::vector<dvec3>(row, row + dims.x + 1), u.x));
+        }
+        in_z.push_back(casteljau(in_y, u.y));
+      }
+      const dvec3 expected = casteljau(in_z, u.z);
+      const dvec3 got = warp_forward(NodeKind::Ffd, prm, lo + u * (hi - lo));
+      EXPECT_LT(glm::length(got - expected), 1e-12) << dims.x << " " << dims.y << " " << dims.z;
+    }
+  }
+}
