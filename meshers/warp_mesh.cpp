@@ -4,6 +4,7 @@
 #include "runtime/tape_eval.hpp"
 
 #include <glm/geometric.hpp>
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <array>
@@ -49,7 +50,8 @@ TriangleMesh warp_mesh(const TriangleMesh& child, const std::function<glm::dvec3
   std::vector<glm::dvec3> local = child.positions;  // child space
   std::vector<glm::uvec3> tris = child.triangles;
   std::vector<glm::dvec3> world(local.size());
-  for (std::size_t i = 0; i < local.size(); ++i) world[i] = warp(local[i]);
+  // An ffd's warp (a trivariate Bernstein sum) costs more than the rest of this function.
+  tbb::parallel_for(std::size_t(0), local.size(), [&](std::size_t i) { world[i] = warp(local[i]); });
   WarpRemeshStats s;
   const double limit2 = max_edge * max_edge;
   for (int pass = 0; pass < kMaxPasses; ++pass) {
@@ -79,11 +81,11 @@ TriangleMesh warp_mesh(const TriangleMesh& child, const std::function<glm::dvec3
     if (field) project(mids, *field, T);
     std::unordered_map<std::uint64_t, std::uint32_t> mid_of;
     mid_of.reserve(long_edges.size() * 2);
-    for (std::size_t i = 0; i < long_edges.size(); ++i) {
-      mid_of.emplace(long_edges[i], static_cast<std::uint32_t>(local.size()));
-      local.push_back(mids[i]);
-      world.push_back(warp(mids[i]));
-    }
+    const std::size_t first = local.size();
+    local.insert(local.end(), mids.begin(), mids.end());
+    world.resize(local.size());
+    tbb::parallel_for(std::size_t(0), mids.size(), [&](std::size_t i) { world[first + i] = warp(mids[i]); });
+    for (std::size_t i = 0; i < long_edges.size(); ++i) mid_of.emplace(long_edges[i], static_cast<std::uint32_t>(first + i));
     // Red-green refinement, orientation kept: rotate each triangle so its split edges come first.
     std::vector<glm::uvec3> next;
     next.reserve(tris.size() * 2);

@@ -28,7 +28,7 @@ struct WarpRemeshStats {
 /// edge longer than max_edge whose warped midpoint lies in that box is split, stretched or not
 /// (the local strategies refine a coarse operand near a seam this way).
 /// A null `child_field` leaves new vertices at the midpoints (for meshes with no one field of
-/// their own, such as a partial Boolean result).
+/// their own, such as a partial Boolean result). `warp` is called from several threads at once.
 TriangleMesh warp_mesh(const TriangleMesh& child_mesh, const std::function<glm::dvec3(const glm::dvec3&)>& warp,
                        const TapeEvaluator* child_field, double threshold, double max_edge,
                        WarpRemeshStats* stats = nullptr, const Aabb* region = nullptr);

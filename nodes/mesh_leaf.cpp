@@ -6,6 +6,7 @@
 #include "nodes/winding.hpp"
 
 #include <glm/geometric.hpp>
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cfloat>
@@ -102,8 +103,10 @@ void MeshLeaf::Accel::compute_normals(const std::vector<glm::dvec3>& pos, const 
   nbr = std::move(neighbours);
   // Built from the final, oriented triangles, so that a mesh and its flipped twin answer alike
   // to the last bit.
+  // Each loop runs in parallel over independent items; the angle-weighted sums are added up in
+  // triangle order afterwards, so the normals are the same bits at any thread count.
   records.resize(tris.size());
-  for (std::size_t slot = 0; slot < order.size(); ++slot) {
+  tbb::parallel_for(std::size_t(0), order.size(), [&](std::size_t slot) {
     const glm::uvec3 t = tris[order[slot]];
     TriRecord& r = records[slot];
     r.a = pos[t[0]];
@@ -115,19 +118,21 @@ void MeshLeaf::Accel::compute_normals(const std::vector<glm::dvec3>& pos, const 
     r.thickness = std::max({std::abs(glm::dot(r.a - r.centre, r.normal)), std::abs(glm::dot(r.b - r.centre, r.normal)),
                             std::abs(glm::dot(r.c - r.centre, r.normal))});
     r.tri = order[slot];
-  }
+  });
   face_normal.resize(tris.size());
-  vertex_normal.assign(pos.size(), glm::dvec3(0.0));
-  for (std::size_t t = 0; t < tris.size(); ++t) {
+  std::vector<glm::dvec3> corner_normal(3 * tris.size());  // angle * face normal at each corner
+  tbb::parallel_for(std::size_t(0), tris.size(), [&](std::size_t t) {
     const glm::dvec3 p[3] = {pos[tris[t][0]], pos[tris[t][1]], pos[tris[t][2]]};
     const glm::dvec3 n = unit_or_zero(glm::cross(p[1] - p[0], p[2] - p[0]));
     face_normal[t] = n;
     for (int k = 0; k < 3; ++k) {
       const glm::dvec3 e1 = p[(k + 1) % 3] - p[k], e2 = p[(k + 2) % 3] - p[k];
-      const double angle = std::atan2(glm::length(glm::cross(e1, e2)), glm::dot(e1, e2));
-      vertex_normal[tris[t][k]] += angle * n;
+      corner_normal[3 * t + std::size_t(k)] = std::atan2(glm::length(glm::cross(e1, e2)), glm::dot(e1, e2)) * n;
     }
-  }
+  });
+  vertex_normal.assign(pos.size(), glm::dvec3(0.0));
+  for (std::size_t t = 0; t < tris.size(); ++t)
+    for (int k = 0; k < 3; ++k) vertex_normal[tris[t][k]] += corner_normal[3 * t + std::size_t(k)];
   // A vertex where shells (or two cones of one shell) touch has several fans of triangles; its
   // summed pseudo-normal means nothing, so queries nearest to it use the ray-parity test.
   std::vector<std::uint32_t> incident(pos.size(), 0), first(pos.size(), kNone);
@@ -137,8 +142,8 @@ void MeshLeaf::Accel::compute_normals(const std::vector<glm::dvec3>& pos, const 
       if (first[tris[t][k]] == kNone) first[tris[t][k]] = t;
     }
   complex_vertex.assign(pos.size(), 0);
-  for (std::uint32_t v = 0; v < pos.size(); ++v) {
-    if (first[v] == kNone) continue;
+  tbb::parallel_for(std::uint32_t(0), std::uint32_t(pos.size()), [&](std::uint32_t v) {
+    if (first[v] == kNone) return;
     std::uint32_t t = first[v], steps = 0;
     do {  // turn about v across the edge leaving it
       const std::uint32_t k = tris[t][0] == v ? 0u : tris[t][1] == v ? 1u : 2u;
@@ -146,7 +151,7 @@ void MeshLeaf::Accel::compute_normals(const std::vector<glm::dvec3>& pos, const 
       ++steps;
     } while (t != first[v] && t != kNone && steps <= incident[v]);
     complex_vertex[v] = steps != incident[v] ? 1 : 0;
-  }
+  });
 }
 
 // True when the closest point is (within rounding) a vertex where several fans meet: the
