@@ -10,8 +10,12 @@
 #include "runtime/tape_eval.hpp"
 
 #include <glm/geometric.hpp>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <numbers>
 #include <numeric>
@@ -44,32 +48,37 @@ std::pair<double, double> min_and_p1(std::vector<float>& angles) {
   return {*std::min_element(angles.begin(), at + 1), p1};
 }
 
-}  // namespace
 
-MeshChecks check_mesh(const TriangleMesh& mesh, bool self_intersections) {
-  MeshChecks c;
-  const auto& P = mesh.positions;
-  const auto& T = mesh.triangles;
-  c.vertices = P.size();
-  c.triangles = T.size();
+// A triangle's side from `lo` to `hi` (lo < hi), walked forward (lo to hi) or not.
+struct HalfEdge {
+  std::uint32_t lo, hi, tri;
+  bool forward;
+};
 
-  // Half-edges sorted by their undirected edge: count how many triangles use each edge and in
-  // which direction.
-  struct HalfEdge {
-    std::uint32_t lo, hi, tri;
-    bool forward;  // from lo to hi
-  };
-  std::vector<HalfEdge> he;
-  he.reserve(3 * T.size());
+// Every triangle's three sides, grouped by undirected edge and ordered by (lo, hi, tri): bucketed
+// by the lower vertex (a counting sort), then each small bucket sorted by the upper vertex, stably,
+// so triangles stay in order. A general sort of all of them was most of the checks' time.
+std::vector<HalfEdge> sides_by_edge(std::size_t vertices, const std::vector<glm::uvec3>& T) {
+  std::vector<std::uint32_t> first(vertices + 1, 0);
+  for (const glm::uvec3& t : T)
+    for (int k = 0; k < 3; ++k) ++first[std::min(t[k], t[(k + 1) % 3]) + 1];
+  std::partial_sum(first.begin(), first.end(), first.begin());
+  std::vector<HalfEdge> he(3 * T.size());
+  std::vector<std::uint32_t> fill(first.begin(), first.end() - 1);
   for (std::uint32_t t = 0; t < T.size(); ++t)
     for (int k = 0; k < 3; ++k) {
       const std::uint32_t a = T[t][k], b = T[t][(k + 1) % 3];
-      he.push_back({std::min(a, b), std::max(a, b), t, a < b});
+      he[fill[std::min(a, b)]++] = {std::min(a, b), std::max(a, b), t, a < b};
     }
-  std::sort(he.begin(), he.end(), [](const HalfEdge& x, const HalfEdge& y) {
-    return x.lo != y.lo ? x.lo < y.lo : x.hi != y.hi ? x.hi < y.hi : x.tri < y.tri;
+  tbb::parallel_for(std::size_t(0), vertices, [&](std::size_t v) {
+    for (std::uint32_t i = first[v] + 1; i < first[v + 1]; ++i)  // insertion sort: a few sides each
+      for (std::uint32_t j = i; j > first[v] && he[j - 1].hi > he[j].hi; --j) std::swap(he[j - 1], he[j]);
   });
-  UnionFind tris(T.size());
+  return he;
+}
+
+// Counts edges by use and direction, and joins the triangles across each edge into components.
+void edge_census(const std::vector<HalfEdge>& he, UnionFind& tris, MeshChecks& c) {
   for (std::size_t i = 0; i < he.size();) {
     std::size_t j = i;
     while (j < he.size() && he[j].lo == he[i].lo && he[j].hi == he[i].hi) ++j;
@@ -82,45 +91,54 @@ MeshChecks check_mesh(const TriangleMesh& mesh, bool self_intersections) {
     for (auto it = he.begin() + std::ptrdiff_t(i) + 1; it != he.begin() + std::ptrdiff_t(j); ++it) tris.unite(first, it->tri);
     i = j;
   }
+}
 
-  // Vertex fans: the triangles around a vertex, linked through the edges at the vertex, must
-  // form one group.
-  std::vector<std::uint32_t> start(P.size() + 1, 0);
-  for (const auto& t : T)
-    for (int k = 0; k < 3; ++k) ++start[t[k] + 1];
-  std::partial_sum(start.begin(), start.end(), start.begin());
-  std::vector<std::uint32_t> incident(start.back()), fill(start.begin(), start.end() - 1);
-  for (std::uint32_t t = 0; t < T.size(); ++t)
-    for (int k = 0; k < 3; ++k) incident[fill[T[t][k]]++] = t;
-  std::vector<std::uint32_t> group;
-  for (std::uint32_t v = 0; v < P.size(); ++v) {
-    const std::uint32_t b = start[v], e = start[v + 1];
-    if (b == e) {
-      ++c.unused_vertices;
-      continue;
-    }
-    // Small fans: a quadratic link is cheaper than any structure.
-    group.assign(e - b, 0);
-    std::iota(group.begin(), group.end(), 0u);
-    auto root = [&](std::uint32_t x) {
-      while (group[x] != x) x = group[x];
-      return x;
-    };
-    for (std::uint32_t i = b; i < e; ++i)
-      for (std::uint32_t j = i + 1; j < e; ++j) {
-        const auto& ti = T[incident[i]];
-        const auto& tj = T[incident[j]];
-        int shared = 0;  // vertices shared besides v: an edge at v when there is one
-        for (int x = 0; x < 3; ++x)
-          for (int y = 0; y < 3; ++y) shared += (ti[x] == tj[y] && ti[x] != v) ? 1 : 0;
-        if (shared > 0) group[root(i - b)] = root(j - b);
-      }
-    std::size_t roots = 0;
-    for (std::uint32_t i = 0; i < e - b; ++i) roots += root(i) == i ? 1 : 0;
-    if (roots > 1) ++c.nonmanifold_vertices;
-  }
+// Vertex fans: the triangles around a vertex, linked through the edges at the vertex, must form
+// one group. `start`/`incident` list each vertex's triangles.
+void fan_census(const std::vector<glm::uvec3>& T, const std::vector<std::uint32_t>& start,
+                const std::vector<std::uint32_t>& incident, MeshChecks& c) {
+  using Counts = std::array<std::size_t, 2>;  // unused, non-manifold
+  const Counts n = tbb::parallel_reduce(
+      tbb::blocked_range<std::uint32_t>(0, std::uint32_t(start.size() - 1)), Counts{0, 0},
+      [&](const tbb::blocked_range<std::uint32_t>& r, Counts acc) {
+        std::vector<std::uint32_t> group;
+        for (std::uint32_t v = r.begin(); v < r.end(); ++v) {
+          const std::uint32_t b = start[v], e = start[v + 1];
+          if (b == e) {
+            ++acc[0];
+            continue;
+          }
+          // Small fans: a quadratic link is cheaper than any structure.
+          group.assign(e - b, 0);
+          std::iota(group.begin(), group.end(), 0u);
+          auto root = [&](std::uint32_t x) {
+            while (group[x] != x) x = group[x];
+            return x;
+          };
+          for (std::uint32_t i = b; i < e; ++i)
+            for (std::uint32_t j = i + 1; j < e; ++j) {
+              const auto& ti = T[incident[i]];
+              const auto& tj = T[incident[j]];
+              int shared = 0;  // vertices shared besides v: an edge at v when there is one
+              for (int x = 0; x < 3; ++x)
+                for (int y = 0; y < 3; ++y) shared += (ti[x] == tj[y] && ti[x] != v) ? 1 : 0;
+              if (shared > 0) group[root(i - b)] = root(j - b);
+            }
+          std::size_t roots = 0;
+          for (std::uint32_t i = 0; i < e - b; ++i) roots += root(i) == i ? 1 : 0;
+          if (roots > 1) ++acc[1];
+        }
+        return acc;
+      },
+      [](Counts a, const Counts& b) { return Counts{a[0] + b[0], a[1] + b[1]}; });
+  c.unused_vertices = n[0];
+  c.nonmanifold_vertices = n[1];
+}
 
-  // Components, Euler characteristic and genus.
+// Components, Euler characteristic and genus.
+void component_census(const std::vector<glm::uvec3>& T, const std::vector<HalfEdge>& he, UnionFind& tris,
+                      const std::vector<std::uint32_t>& start, const std::vector<std::uint32_t>& incident,
+                      MeshChecks& c) {
   std::vector<long> comp_v, comp_e, comp_f;
   std::vector<std::uint32_t> comp_of(T.size()), comp_id(T.size(), kNoIndex);
   for (std::uint32_t t = 0; t < T.size(); ++t) {
@@ -135,7 +153,7 @@ MeshChecks check_mesh(const TriangleMesh& mesh, bool self_intersections) {
     ++comp_f[comp_of[t]];
   }
   c.components = comp_f.size();
-  for (std::uint32_t v = 0; v < P.size(); ++v)
+  for (std::size_t v = 0; v + 1 < start.size(); ++v)
     if (start[v] != start[v + 1]) ++comp_v[comp_of[incident[start[v]]]];
   for (std::size_t i = 0; i < he.size();) {
     std::size_t j = i;
@@ -148,8 +166,13 @@ MeshChecks check_mesh(const TriangleMesh& mesh, bool self_intersections) {
     c.euler += chi;
     c.genus += (2 - chi) / 2;
   }
+}
 
-  // Geometry.
+// Area, volume, degenerate triangles and angles: each triangle's figures in parallel, summed in
+// triangle order (the same bits at any thread count).
+void geometry_census(const TriangleMesh& mesh, MeshChecks& c) {
+  const auto& P = mesh.positions;
+  const auto& T = mesh.triangles;
   glm::dvec3 lo(0.0), hi(0.0);
   if (!P.empty()) lo = hi = P[0];
   for (const auto& p : P) {
@@ -157,22 +180,50 @@ MeshChecks check_mesh(const TriangleMesh& mesh, bool self_intersections) {
     hi = glm::max(hi, p);
   }
   const double scale = std::max(glm::length(hi - lo), 1e-300);
-  c.min_angle = T.empty() ? 0.0 : 180.0;
-  std::vector<float> smallest;  // each triangle's smallest angle, for the percentile
-  smallest.reserve(T.size());
-  for (const auto& t : T) {
+  std::vector<double> area2(T.size()), volume6(T.size());
+  std::vector<float> smallest(T.size());  // each triangle's smallest angle, for the percentile
+  std::vector<double> amin(T.size());
+  tbb::parallel_for(std::size_t(0), T.size(), [&](std::size_t i) {
+    const glm::uvec3& t = T[i];
     const glm::dvec3 a = P[t[0]], b = P[t[1]], d = P[t[2]];
-    const glm::dvec3 n = glm::cross(b - a, d - a);
-    const double area2 = glm::length(n);
-    c.area += 0.5 * area2;
-    c.volume += glm::dot(a, glm::cross(b, d)) / 6.0;
-    if (area2 <= 1e-14 * scale * scale) ++c.degenerate_triangles;
-    const double amin = smallest_angle(a, b, d);
-    c.min_angle = std::min(c.min_angle, amin);
-    ++c.min_angle_histogram[std::min<std::size_t>(5, static_cast<std::size_t>(amin / 10.0))];
-    smallest.push_back(float(amin));
+    area2[i] = glm::length(glm::cross(b - a, d - a));
+    volume6[i] = glm::dot(a, glm::cross(b, d));
+    amin[i] = smallest_angle(a, b, d);
+    smallest[i] = float(amin[i]);
+  });
+  c.min_angle = T.empty() ? 0.0 : 180.0;
+  for (std::size_t i = 0; i < T.size(); ++i) {
+    c.area += 0.5 * area2[i];
+    c.volume += volume6[i] / 6.0;
+    if (area2[i] <= 1e-14 * scale * scale) ++c.degenerate_triangles;
+    c.min_angle = std::min(c.min_angle, amin[i]);
+    ++c.min_angle_histogram[std::min<std::size_t>(5, static_cast<std::size_t>(amin[i] / 10.0))];
   }
   if (!smallest.empty()) c.min_angle_p1 = min_and_p1(smallest).second;
+}
+
+}  // namespace
+
+MeshChecks check_mesh(const TriangleMesh& mesh, bool self_intersections) {
+  MeshChecks c;
+  const auto& P = mesh.positions;
+  const auto& T = mesh.triangles;
+  c.vertices = P.size();
+  c.triangles = T.size();
+  const std::vector<HalfEdge> he = sides_by_edge(P.size(), T);
+  UnionFind tris(T.size());
+  edge_census(he, tris, c);
+  // Each vertex's triangles.
+  std::vector<std::uint32_t> start(P.size() + 1, 0);
+  for (const auto& t : T)
+    for (int k = 0; k < 3; ++k) ++start[t[k] + 1];
+  std::partial_sum(start.begin(), start.end(), start.begin());
+  std::vector<std::uint32_t> incident(start.back()), fill(start.begin(), start.end() - 1);
+  for (std::uint32_t t = 0; t < T.size(); ++t)
+    for (int k = 0; k < 3; ++k) incident[fill[T[t][k]]++] = t;
+  fan_census(T, start, incident, c);
+  component_census(T, he, tris, start, incident, c);
+  geometry_census(mesh, c);
   if (!T.empty() && self_intersections) c.self_intersecting_pairs = find_self_intersections(mesh, 0).pairs;
   return c;
 }

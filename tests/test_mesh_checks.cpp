@@ -1,5 +1,6 @@
-// The angle census of the mesh checks (meshers/mesh_checks.hpp): which triangles are a mesh
-// leaf's own, which lie at a crease, and that the smooth ones' figures are the ones left.
+// The mesh checks (meshers/mesh_checks.hpp): exact defect counts on small meshes whatever their
+// numbering; the angle census: which triangles are a mesh leaf's own, which lie at a crease, and
+// that the smooth ones' figures are the ones left.
 #include "meshers/mesh_checks.hpp"
 #include "meshers/mesh_plan.hpp"
 #include "meshers/mesh_run.hpp"
@@ -13,6 +14,8 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <numeric>
+#include <random>
 #include <cmath>
 #include <filesystem>
 #include <vector>
@@ -21,6 +24,87 @@ namespace ht {
 namespace {
 
 constexpr double kT = 0.5;
+
+// A tetrahedron, outward: 4 vertices, 6 edges, 4 faces.
+TriangleMesh tetrahedron(glm::dvec3 at = glm::dvec3(0.0)) {
+  TriangleMesh m;
+  m.positions = {at, at + glm::dvec3(1, 0, 0), at + glm::dvec3(0, 1, 0), at + glm::dvec3(0, 0, 1)};
+  m.triangles = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
+  return m;
+}
+
+// Two meshes side by side; with `shared`, the second's first vertex is the first's vertex 0.
+TriangleMesh both(const TriangleMesh& a, const TriangleMesh& b, bool shared = false) {
+  TriangleMesh m = a;
+  const std::uint32_t base = std::uint32_t(a.positions.size()) - (shared ? 1u : 0u);
+  for (std::size_t v = shared ? 1 : 0; v < b.positions.size(); ++v) m.positions.push_back(b.positions[v]);
+  for (glm::uvec3 t : b.triangles) {
+    for (int k = 0; k < 3; ++k) t[k] = shared && t[k] == 0 ? 0u : t[k] + base;
+    m.triangles.push_back(t);
+  }
+  return m;
+}
+
+// The same mesh with its vertices and triangles renumbered and each triangle's corners rotated.
+TriangleMesh shuffled(const TriangleMesh& m, test::Rng& rng) {
+  std::vector<std::uint32_t> to(m.positions.size());
+  std::iota(to.begin(), to.end(), 0u);
+  std::shuffle(to.begin(), to.end(), rng);
+  TriangleMesh out;
+  out.positions.resize(m.positions.size());
+  for (std::size_t v = 0; v < to.size(); ++v) out.positions[to[v]] = m.positions[v];
+  for (const glm::uvec3& t : m.triangles) {
+    const int r = int(rng() % 3);
+    out.triangles.push_back({to[t[r]], to[t[(r + 1) % 3]], to[t[(r + 2) % 3]]});
+  }
+  std::shuffle(out.triangles.begin(), out.triangles.end(), rng);
+  return out;
+}
+
+}  // namespace
+
+TEST(MeshChecks, CountsEveryDefectExactlyWhateverTheNumbering) {
+  struct Case {
+    const char* what;
+    TriangleMesh mesh;
+    std::size_t edges, boundary, nonmanifold_edges, misoriented, nonmanifold_vertices, unused, components;
+    long genus;
+  };
+  TriangleMesh flipped = tetrahedron(), open = tetrahedron(), fin = tetrahedron(), spare = tetrahedron();
+  std::swap(flipped.triangles[3][0], flipped.triangles[3][1]);
+  open.triangles.pop_back();
+  fin.positions.push_back({1, 1, 1});
+  fin.triangles.push_back({1, 2, 4});  // a third triangle on edge 1-2
+  spare.positions.push_back({5, 5, 5});
+  const std::vector<Case> cases = {
+      {"tetrahedron", tetrahedron(), 6, 0, 0, 0, 0, 0, 1, 0},
+      {"one face flipped", flipped, 6, 0, 0, 3, 0, 0, 1, 0},
+      {"one face gone", open, 6, 3, 0, 0, 0, 0, 1, 0},
+      {"a fin on an edge", fin, 8, 2, 1, 0, 0, 0, 1, 0},
+      {"an unused vertex", spare, 6, 0, 0, 0, 0, 1, 1, 0},
+      {"two apart", both(tetrahedron(), tetrahedron({3, 0, 0})), 12, 0, 0, 0, 0, 0, 2, 0},
+      {"two touching at a vertex", both(tetrahedron(), tetrahedron({-1, -1, -1}), true), 12, 0, 0, 0, 1, 0, 2, 0},
+  };
+  test::Rng rng = test::seeded();
+  for (const Case& k : cases)
+    for (int trial = 0; trial < 8; ++trial) {
+      const MeshChecks c = check_mesh(trial == 0 ? k.mesh : shuffled(k.mesh, rng), false);
+      EXPECT_EQ(c.edges, k.edges) << k.what;
+      EXPECT_EQ(c.boundary_edges, k.boundary) << k.what;
+      EXPECT_EQ(c.nonmanifold_edges, k.nonmanifold_edges) << k.what;
+      EXPECT_EQ(c.misoriented_edges, k.misoriented) << k.what;
+      EXPECT_EQ(c.nonmanifold_vertices, k.nonmanifold_vertices) << k.what;
+      EXPECT_EQ(c.unused_vertices, k.unused) << k.what;
+      EXPECT_EQ(c.components, k.components) << k.what;
+      EXPECT_EQ(c.genus, k.genus) << k.what;
+    }
+  const MeshChecks c = check_mesh(shuffled(tetrahedron(), rng), false);
+  EXPECT_NEAR(c.volume, 1.0 / 6.0, 1e-15);
+  EXPECT_NEAR(c.area, 1.5 + std::sqrt(3.0) / 2.0, 1e-15);
+  EXPECT_NEAR(c.min_angle, 45.0, 1e-12);
+}
+
+namespace {
 
 TEST(MeshChecks, KeptTrianglesAreTheLeafsOwnBitForBit) {
   const auto leaf = MeshLeaf::load(test::cgal_mesh("eight.off"));
