@@ -1,5 +1,6 @@
 #include "meshers/mesh_checks.hpp"
 
+#include "meshers/edge_sides.hpp"
 #include "meshers/union_find.hpp"
 
 #include "meshers/self_intersections.hpp"
@@ -49,36 +50,8 @@ std::pair<double, double> min_and_p1(std::vector<float>& angles) {
 }
 
 
-// A triangle's side from `lo` to `hi` (lo < hi), walked forward (lo to hi) or not.
-struct HalfEdge {
-  std::uint32_t lo, hi, tri;
-  bool forward;
-};
-
-// Every triangle's three sides, grouped by undirected edge and ordered by (lo, hi, tri): bucketed
-// by the lower vertex (a counting sort), then each small bucket sorted by the upper vertex, stably,
-// so triangles stay in order. A general sort of all of them was most of the checks' time.
-std::vector<HalfEdge> sides_by_edge(std::size_t vertices, const std::vector<glm::uvec3>& T) {
-  std::vector<std::uint32_t> first(vertices + 1, 0);
-  for (const glm::uvec3& t : T)
-    for (int k = 0; k < 3; ++k) ++first[std::min(t[k], t[(k + 1) % 3]) + 1];
-  std::partial_sum(first.begin(), first.end(), first.begin());
-  std::vector<HalfEdge> he(3 * T.size());
-  std::vector<std::uint32_t> fill(first.begin(), first.end() - 1);
-  for (std::uint32_t t = 0; t < T.size(); ++t)
-    for (int k = 0; k < 3; ++k) {
-      const std::uint32_t a = T[t][k], b = T[t][(k + 1) % 3];
-      he[fill[std::min(a, b)]++] = {std::min(a, b), std::max(a, b), t, a < b};
-    }
-  tbb::parallel_for(std::size_t(0), vertices, [&](std::size_t v) {
-    for (std::uint32_t i = first[v] + 1; i < first[v + 1]; ++i)  // insertion sort: a few sides each
-      for (std::uint32_t j = i; j > first[v] && he[j - 1].hi > he[j].hi; --j) std::swap(he[j - 1], he[j]);
-  });
-  return he;
-}
-
 // Counts edges by use and direction, and joins the triangles across each edge into components.
-void edge_census(const std::vector<HalfEdge>& he, UnionFind& tris, MeshChecks& c) {
+void edge_census(const std::vector<Side>& he, UnionFind& tris, MeshChecks& c) {
   for (std::size_t i = 0; i < he.size();) {
     std::size_t j = i;
     while (j < he.size() && he[j].lo == he[i].lo && he[j].hi == he[i].hi) ++j;
@@ -136,7 +109,7 @@ void fan_census(const std::vector<glm::uvec3>& T, const std::vector<std::uint32_
 }
 
 // Components, Euler characteristic and genus.
-void component_census(const std::vector<glm::uvec3>& T, const std::vector<HalfEdge>& he, UnionFind& tris,
+void component_census(const std::vector<glm::uvec3>& T, const std::vector<Side>& he, UnionFind& tris,
                       const std::vector<std::uint32_t>& start, const std::vector<std::uint32_t>& incident,
                       MeshChecks& c) {
   std::vector<long> comp_v, comp_e, comp_f;
@@ -210,7 +183,7 @@ MeshChecks check_mesh(const TriangleMesh& mesh, bool self_intersections) {
   const auto& T = mesh.triangles;
   c.vertices = P.size();
   c.triangles = T.size();
-  const std::vector<HalfEdge> he = sides_by_edge(P.size(), T);
+  const std::vector<Side> he = sides_by_edge(P.size(), T);
   UnionFind tris(T.size());
   edge_census(he, tris, c);
   // Each vertex's triangles.

@@ -1,5 +1,6 @@
 #include "meshers/submesh.hpp"
 
+#include "meshers/openmesh_link.hpp"
 #include "meshers/union_find.hpp"
 
 #include <glm/common.hpp>
@@ -213,7 +214,8 @@ bool to_openmesh(const TriangleMesh& mesh, std::span<const std::uint8_t> locked,
     m.property(locked_prop, h) = !locked.empty() && locked[v];
     m.property(origin_prop, h) = origin.empty() ? std::uint32_t(v) : origin[v];
   }
-  for (const glm::uvec3& t : mesh.triangles)
+  if (link_manifold_triangles(m, mesh.triangles)) return true;
+  for (const glm::uvec3& t : mesh.triangles)  // not a manifold: what add_face makes of it
     if (!m.add_face(TriMesh::VertexHandle(int(t[0])), TriMesh::VertexHandle(int(t[1])), TriMesh::VertexHandle(int(t[2])))
              .is_valid())
       return false;

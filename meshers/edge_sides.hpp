@@ -1,0 +1,27 @@
+// Triangles' sides grouped by the edge they lie on: the shared first step of the mesh checks and of
+// loading a mesh into OpenMesh in bulk.
+#pragma once
+
+#include <glm/vec3.hpp>
+
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <vector>
+
+namespace ht {
+
+/// Side `corner` of triangle `tri`: from its corner `corner` to the next, between vertices
+/// lo < hi; `forward` when it runs from lo to hi.
+struct Side {
+  std::uint32_t lo, hi, tri;
+  std::uint8_t corner;
+  bool forward;
+};
+
+/// Every side of `triangles` (vertex indices below `vertices`), ordered by (lo, hi, tri, corner):
+/// the sides on one edge are consecutive. Linear time (a counting sort by the lower vertex, then
+/// each vertex's few sides sorted by the upper one); parallel inside.
+std::vector<Side> sides_by_edge(std::size_t vertices, std::span<const glm::uvec3> triangles);
+
+}  // namespace ht
