@@ -1,6 +1,6 @@
-// The boundary of a triangle mesh in linear time: the edges that exactly one triangle uses,
-// found by bucketing every edge by its lower vertex (a counting sort) instead of sorting them
-// all. The local strategies call it on whole operand meshes, where a sort would dominate.
+// The boundary of a triangle mesh in linear time: the edges that exactly one triangle uses, found
+// from the sides grouped by edge (meshers/edge_sides.hpp) instead of sorting them all. The local
+// strategies call it on whole operand meshes, where a sort would dominate.
 #pragma once
 
 #include "meshers/triangle_mesh.hpp"
@@ -15,7 +15,7 @@ struct BoundaryEdge {
   std::uint32_t slot;      ///< 3 * triangle + the corner where the edge starts
 };
 
-/// Every edge used by exactly one triangle, ordered by its lower vertex, then by slot.
+/// Every edge used by exactly one triangle, ordered by its lower vertex, then its upper one.
 std::vector<BoundaryEdge> boundary_edges(const TriangleMesh& mesh);
 
 }  // namespace ht
