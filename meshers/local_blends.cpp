@@ -151,7 +151,8 @@ TriangleMesh trim_blend(const LocalInput& in, LocalStats* stats) {
     if (i >= in.child_meshes.size() || !in.child_meshes[i] || in.child_meshes[i]->triangles.empty()) continue;
     const TriangleMesh& m = *in.child_meshes[i];
     st.operand_triangles += m.triangles.size();
-    pieces.push_back(cut_mesh(clip.empty() ? m : refined(m, in, c[i], true, clip), bf.cut(i), cut_options(in)));
+    const BatchField cut = bf.cut(i);
+    pieces.push_back(clip.empty() ? cut_mesh(m, cut, cut_options(in)) : refined_and_cut(m, in, c[i], clip, cut));
   }
   st.kept_triangles = count_triangles(pieces);
   TriangleMesh out;
@@ -183,8 +184,8 @@ TriangleMesh trim_local_blend(const LocalInput& in, LocalStats* stats) {
   const Aabb acts = intersect(fr.support(), merge(fa.support(), fb.support())).expanded(2.0 * in.precision);
   const Aabb near = merge(both, acts);
   std::vector<TriangleMesh> pieces;
-  pieces.push_back(cut_mesh(refined(operand(in, 0), in, c[0], true, near), keep(fb), cut_options(in)));
-  pieces.push_back(cut_mesh(refined(operand(in, 1), in, c[1], true, near), keep(fa), cut_options(in)));
+  pieces.push_back(refined_and_cut(operand(in, 0), in, c[0], near, keep(fb)));
+  pieces.push_back(refined_and_cut(operand(in, 1), in, c[1], near, keep(fa)));
   st.operand_triangles = operand(in, 0).triangles.size() + operand(in, 1).triangles.size();
   st.kept_triangles = count_triangles(pieces);
   // The union's crease is welded exactly (a tighter gap: where R acts the pieces part, and

@@ -25,15 +25,42 @@ const TriangleMesh& operand(const LocalInput& in, std::size_t i) {
   return *in.child_meshes[i];
 }
 
-// The operand's mesh with its edges longer than the precision split where `region` says the
-// other operands act (new vertices projected onto the operand's own surface): a coarse mesh's
-// long chords would otherwise cut a curved seam short. Vertices already there stay bit for bit.
-TriangleMesh refined(const TriangleMesh& mesh, const LocalInput& in, NodeId child, bool under_blend, const Aabb& region,
-                     double max_edge) {
-  const TapeEvaluator field(std::make_shared<const Tape>(compile_tape(in.graph, child, in.threshold, nullptr, under_blend)));
+// A seam's triangles are those whose corners lie on both sides of the cut; a coarse triangle can
+// hold a whole seam between its corners, so long edges count wherever they are.
+std::vector<std::uint8_t> near_seam(const TriangleMesh& mesh, const Aabb& box, std::span<const double> values,
+                                    double coarse) {
+  std::vector<std::int8_t> side(mesh.positions.size(), 0);  // 0: outside the box
+  for (std::size_t v = 0; v < side.size(); ++v)
+    if (box.contains(mesh.positions[v])) side[v] = values[v] > 0 ? 1 : -1;
+  std::vector<std::uint8_t> crossed(mesh.positions.size(), 0), any(mesh.positions.size(), 1),
+      long_edge(mesh.positions.size(), 0);
+  for (const glm::uvec3& t : mesh.triangles) {
+    const int s0 = side[t[0]], s1 = side[t[1]], s2 = side[t[2]];
+    if (s0 * s1 < 0 || s1 * s2 < 0 || s0 * s2 < 0)
+      for (int k = 0; k < 3; ++k) crossed[t[k]] = 1;
+    for (int k = 0; k < 3; ++k)
+      if (glm::length(mesh.positions[t[k]] - mesh.positions[t[(k + 1) % 3]]) > coarse)
+        long_edge[t[k]] = long_edge[t[(k + 1) % 3]] = 1;
+  }
+  std::vector<std::uint8_t> near = rings_around(mesh, crossed, any, kSeamRings);
+  for (std::size_t v = 0; v < near.size(); ++v) near[v] = near[v] || crossed[v] || long_edge[v];
+  return near;
+}
+
+TriangleMesh refined_and_cut(const TriangleMesh& mesh, const LocalInput& in, NodeId child, const Aabb& region,
+                             const BatchField& cut) {
+  std::vector<double> values(mesh.positions.size());
+  if (!values.empty()) cut(mesh.positions, values);
+  const TapeEvaluator field(std::make_shared<const Tape>(compile_tape(in.graph, child, in.threshold, nullptr, true)));
   const Aabb box = region.expanded(in.precision);
-  return warp_mesh(mesh, [](const glm::dvec3& p) { return p; }, &field, in.threshold,
-                   max_edge > 0 ? max_edge : 1.5 * in.precision, nullptr, &box);
+  const TriangleMesh r = warp_mesh(mesh, [](const glm::dvec3& p) { return p; }, &field, in.threshold, 1.5 * in.precision,
+                                   nullptr, &box, near_seam(mesh, box, values, kCoarseEdges * 1.5 * in.precision));
+  // The refinement keeps the vertices' order and appends the new ones: only those are evaluated.
+  const std::size_t n = mesh.positions.size();
+  values.resize(r.positions.size());
+  if (r.positions.size() > n)
+    cut(std::span(r.positions).subspan(n), std::span(values).subspan(n));
+  return cut_mesh(r, values, cut, cut_options(in));
 }
 
 void flip(TriangleMesh& m) {

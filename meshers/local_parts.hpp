@@ -9,6 +9,7 @@
 
 #include <functional>
 #include <memory>
+#include <span>
 #include <vector>
 
 namespace ht::local {
@@ -47,11 +48,24 @@ class NodeField {
 CutOptions cut_options(const LocalInput& in);
 /// Child i's mesh; throws LocalFailure when it has none.
 const TriangleMesh& operand(const LocalInput& in, std::size_t i);
-/// The operand's mesh with edges longer than max_edge (default 1.5 h) split inside `region`,
-/// widened by h, new vertices projected onto the child's surface: a coarse mesh's long chords
-/// would otherwise cut a curved seam short. Vertices already there stay bit for bit.
-TriangleMesh refined(const TriangleMesh& mesh, const LocalInput& in, NodeId child, bool under_blend, const Aabb& region,
-                     double max_edge = 0.0);
+/// Rings of triangles around a cut's seam that its refinement covers.
+inline constexpr int kSeamRings = 2;
+/// Edges this many times the refinement's length are refined wherever they are: a seam can pass
+/// through a coarse triangle between its corners without any of them seeing it.
+inline constexpr double kCoarseEdges = 3.0;
+/// The vertices within kSeamRings edges of a triangle whose corners inside `box` lie on both
+/// sides of a cut's zero (`values`: the cut at each vertex), and the ends of edges longer than
+/// `coarse`.
+std::vector<std::uint8_t> near_seam(const TriangleMesh& mesh, const Aabb& box, std::span<const double> values,
+                                    double coarse);
+/// The operand's mesh (under a blend), its edges longer than 1.5 h split inside `region` widened
+/// by h and near the seam `cut` makes (near_seam), new vertices projected onto the child's
+/// surface, then cut (the part where cut < 0, as cut_mesh): a coarse mesh's long chords would
+/// otherwise cut a curved seam short. Only near the seam: elsewhere the splits would only halve
+/// the long sides of a scan's own thin triangles into thinner ones, outside the rings the bands'
+/// remeshing reaches. Vertices already there stay bit for bit; the cut is evaluated once at each.
+TriangleMesh refined_and_cut(const TriangleMesh& mesh, const LocalInput& in, NodeId child, const Aabb& region,
+                             const BatchField& cut);
 /// Turns every triangle over.
 void flip(TriangleMesh& m);
 bool overlaps(const Aabb& a, const Aabb& b);

@@ -46,7 +46,8 @@ std::function<glm::dvec3(const glm::dvec3&)> forward_map(const Graph& graph, Nod
 
 TriangleMesh warp_mesh(const TriangleMesh& child, const std::function<glm::dvec3(const glm::dvec3&)>& warp,
                        const TapeEvaluator* field, double T, double max_edge, WarpRemeshStats* stats,
-                       const Aabb* region) {
+                       const Aabb* region, std::span<const std::uint8_t> only) {
+  auto eligible = [&](std::uint32_t v) { return only.empty() || v >= only.size() || only[v] != 0; };
   std::vector<glm::dvec3> local = child.positions;  // child space
   std::vector<glm::uvec3> tris = child.triangles;
   std::vector<glm::dvec3> world(local.size());
@@ -64,7 +65,7 @@ TriangleMesh warp_mesh(const TriangleMesh& child, const std::function<glm::dvec3
         // own edges as they were (the paper: it preserves the triangles' shapes).
         const double warped2 = glm::dot(world[a] - world[b], world[a] - world[b]);
         if (warped2 > limit2 && (region || warped2 > kStretch * kStretch * glm::dot(local[a] - local[b], local[a] - local[b])) &&
-            (!region || region->contains(0.5 * (world[a] + world[b]))))
+            (!region || region->contains(0.5 * (world[a] + world[b]))) && eligible(a) && eligible(b))
           long_edges.push_back(edge_key(a, b));
       }
     std::sort(long_edges.begin(), long_edges.end());

@@ -12,6 +12,7 @@
 
 #include <functional>
 #include <memory>
+#include <span>
 
 namespace ht {
 
@@ -29,9 +30,12 @@ struct WarpRemeshStats {
 /// (the local strategies refine a coarse operand near a seam this way).
 /// A null `child_field` leaves new vertices at the midpoints (for meshes with no one field of
 /// their own, such as a partial Boolean result). `warp` is called from several threads at once.
+/// With `only` (one flag per vertex of child_mesh), an edge is split only when both its ends are
+/// flagged or new.
 TriangleMesh warp_mesh(const TriangleMesh& child_mesh, const std::function<glm::dvec3(const glm::dvec3&)>& warp,
                        const TapeEvaluator* child_field, double threshold, double max_edge,
-                       WarpRemeshStats* stats = nullptr, const Aabb* region = nullptr);
+                       WarpRemeshStats* stats = nullptr, const Aabb* region = nullptr,
+                       std::span<const std::uint8_t> only = {});
 
 /// The forward map of warp node `node` (affine, twist, taper, bend or ffd).
 std::function<glm::dvec3(const glm::dvec3&)> forward_map(const Graph& graph, NodeId node);

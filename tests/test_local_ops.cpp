@@ -12,6 +12,9 @@
 #include <glm/geometric.hpp>
 #include <glm/gtc/matrix_transform.hpp>
 #include <gtest/gtest.h>
+
+#include <cmath>
+#include <map>
 #include <tbb/global_control.h>
 
 #include <algorithm>
@@ -98,6 +101,34 @@ void run_cases(const std::vector<Case>& cases, double h) {
   }
 }
 
+// A ball of radius 0.5 in 80 triangles (an icosahedron split once): every edge many precisions long.
+std::shared_ptr<const MeshLeaf> coarse_ball() {
+  static const auto leaf = [] {
+    const double g = (1.0 + std::sqrt(5.0)) / 2.0;
+    std::vector<dvec3> p = {{-1, g, 0}, {1, g, 0}, {-1, -g, 0}, {1, -g, 0}, {0, -1, g}, {0, 1, g},
+                            {0, -1, -g}, {0, 1, -g}, {g, 0, -1}, {g, 0, 1}, {-g, 0, -1}, {-g, 0, 1}};
+    std::vector<glm::uvec3> t = {{0, 11, 5}, {0, 5, 1}, {0, 1, 7}, {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
+                                 {11, 10, 2}, {10, 7, 6}, {7, 1, 8}, {3, 9, 4}, {3, 4, 2}, {3, 2, 6}, {3, 6, 8},
+                                 {3, 8, 9}, {4, 9, 5}, {2, 4, 11}, {6, 2, 10}, {8, 6, 7}, {9, 8, 1}};
+    std::map<std::pair<std::uint32_t, std::uint32_t>, std::uint32_t> mid;
+    auto middle = [&](std::uint32_t a, std::uint32_t b) {
+      const auto key = std::minmax(a, b);
+      const auto it = mid.find(key);
+      if (it != mid.end()) return it->second;
+      p.push_back(0.5 * (p[a] + p[b]));
+      return mid[key] = std::uint32_t(p.size() - 1);
+    };
+    std::vector<glm::uvec3> split;
+    for (const glm::uvec3& f : t) {
+      const std::uint32_t ab = middle(f[0], f[1]), bc = middle(f[1], f[2]), ca = middle(f[2], f[0]);
+      split.insert(split.end(), {{f[0], ab, ca}, {ab, f[1], bc}, {ca, bc, f[2]}, {ab, bc, ca}});
+    }
+    for (dvec3& q : p) q = 0.5 * glm::normalize(q);
+    return MeshLeaf::from_triangles(std::move(p), std::move(split), "coarse ball");
+  }();
+  return leaf;
+}
+
 // eight.off pushed into bunny00's flank, and armadillo at a third of bunny00's size on its back.
 NodeId shifted_eight(Builder& b) {
   return b.affine(b.mesh(eight(), {0.05}), glm::translate(glm::dmat4(1.0), dvec3(0.35, 0.1, 0.0)));
@@ -109,6 +140,14 @@ NodeId small_armadillo(Builder& b) {
 
 // bunny00's left ear tip is near (-0.005, 0.494, -0.12).
 constexpr dvec3 kEar{-0.005, 0.5, -0.12};
+
+// Above the middle of the coarse ball's fourth triangle (the middle one of the first
+// icosahedron face), 0.06 off the sphere it is inscribed in.
+dvec3 face_middle() {
+  const auto& p = coarse_ball()->positions();
+  const glm::uvec3 t = coarse_ball()->triangles()[3];
+  return 0.56 * glm::normalize(p[t[0]] + p[t[1]] + p[t[2]]);
+}
 
 }  // namespace
 
@@ -170,6 +209,11 @@ TEST(LocalBlends, PrimitivesAndMeshLeaves) {
        JobStrategy::TrimBlend},
       {"eight + segment", 2,
        [](Builder& b) { return b.blend({b.mesh(eight(), {0.05}), b.segment({0.2, 0, -0.3}, {0.5, 0, -0.3}, {0.12})}); },
+       JobStrategy::TrimBlend},
+      // The small ball acts in the middle of one face, where no corner of the coarse mesh sees it:
+      // the face is refined all the same (its edges are coarse), or the seam would be cut short.
+      {"coarse ball + sphere", 0,
+       [](Builder& b) { return b.blend({b.mesh(coarse_ball(), {0.05}), b.point(face_middle(), {0.1})}); },
        JobStrategy::TrimBlend},
   };
   run_cases(cases, 0.01);
