@@ -36,8 +36,8 @@ std::uint32_t prev_in(std::uint32_t s) { return s - s % 3 + (s % 3 + 2) % 3; }
 // Whether every vertex's triangles form one fan: turning about the vertex from one of its sides
 // (to the mate of the side that arrives there, and back the other way to a boundary) must meet
 // all of them. `first_out[v]` is v's side in the first triangle that uses it.
-bool one_fan_each(std::span<const glm::uvec3> T, const std::vector<std::uint32_t>& mate,
-                  const std::vector<std::uint32_t>& first_out, const std::vector<std::uint32_t>& uses) {
+bool one_fan_each(const std::vector<std::uint32_t>& mate, const std::vector<std::uint32_t>& first_out,
+                  const std::vector<std::uint32_t>& uses) {
   for (std::size_t v = 0; v < first_out.size(); ++v) {
     const std::uint32_t s0 = first_out[v];
     if (s0 == kNone) continue;
@@ -59,7 +59,6 @@ bool one_fan_each(std::span<const glm::uvec3> T, const std::vector<std::uint32_t
     }
     if (seen != uses[v]) return false;
   }
-  (void)T;
   return true;
 }
 
@@ -78,7 +77,7 @@ bool link_manifold_triangles(TriMesh& m, std::span<const glm::uvec3> T) {
     ++uses[v];
     if (first_out[v] == kNone) first_out[v] = s;
   }
-  if (!one_fan_each(T, mate, first_out, uses)) return false;
+  if (!one_fan_each(mate, first_out, uses)) return false;
 
   // Edges in order of first use, halfedge 0 along that side.
   std::vector<HH> half(3 * T.size());
