@@ -10,7 +10,12 @@
 #include "nodes/warps.hpp"
 #include "runtime/graph_writer.hpp"
 
+#include <tbb/parallel_invoke.h>
+
+#include <array>
+#include <exception>
 #include <limits>
+#include <string>
 #include <vector>
 
 namespace ht {
@@ -52,19 +57,36 @@ std::shared_ptr<const MeshLeaf> deform_child_mesh(const std::shared_ptr<const Gr
     for (glm::dvec3& v : mesh.positions) v = warp_forward(NodeKind::Ffd, params, v);
   }
   // A fold the child's mesh all but made (two sheets of a thin band a hair apart) can close
-  // under the lattice; its intersecting triangles give up edges (meshers/unfold.hpp).
-  auto pairs = find_self_intersections(mesh, std::numeric_limits<std::size_t>::max()).examples;
-  if (!pairs.empty()) {
-    std::vector<std::uint8_t> no_crease;
-    unfold(mesh, no_crease, pairs, kUnfoldRounds);
+  // under the lattice; its intersecting triangles give up edges (meshers/unfold.hpp). The search
+  // and the mesh leaf that takes it to find nothing are built side by side (the leaf's build is
+  // mostly serial); when it does find pairs, the leaf is built again from the unfolded mesh.
+  const std::string name = "deformed mesh of ffd node " + g.label(n);
+  auto build = [&name](std::vector<glm::dvec3> p, std::vector<glm::uvec3> t, bool intersection_free) {
+    try {
+      return MeshLeaf::from_triangles(std::move(p), std::move(t), name, false, MeshInside::Closed, intersection_free);
+    } catch (const MeshError& e) {
+      throw PolygonizeError(e.what());
+    }
+  };
+  std::vector<std::array<std::uint32_t, 2>> pairs;
+  std::shared_ptr<const MeshLeaf> leaf;
+  std::exception_ptr failed;
+  tbb::parallel_invoke([&] { pairs = find_self_intersections(mesh, std::numeric_limits<std::size_t>::max()).examples; },
+                       [&] {
+                         try {
+                           leaf = build(mesh.positions, mesh.triangles, true);
+                         } catch (...) {
+                           failed = std::current_exception();
+                         }
+                       });
+  if (pairs.empty()) {
+    if (failed) std::rethrow_exception(failed);
+    return leaf;
   }
-  try {
-    // `pairs` now holds every intersecting pair left; with none, MeshLeaf need not search again.
-    return MeshLeaf::from_triangles(std::move(mesh.positions), std::move(mesh.triangles),
-                                    "deformed mesh of ffd node " + g.label(n), false, MeshInside::Closed, pairs.empty());
-  } catch (const MeshError& e) {
-    throw PolygonizeError(e.what());
-  }
+  std::vector<std::uint8_t> no_crease;
+  unfold(mesh, no_crease, pairs, kUnfoldRounds);
+  // `pairs` now holds every intersecting pair left; with none, MeshLeaf need not search again.
+  return build(std::move(mesh.positions), std::move(mesh.triangles), pairs.empty());
 }
 
 std::shared_ptr<const Graph> attach_ffd_mesh(const Graph& graph, NodeId n, std::shared_ptr<const MeshLeaf> leaf) {

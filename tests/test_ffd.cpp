@@ -137,3 +137,21 @@ TEST(Ffd, DeformationIsDeCasteljauOfTheLattice) {
     }
   }
 }
+
+// A lattice that pushes one ball through the other: the shells cross, unfolding cannot undo that,
+// and the deformed mesh is refused. The mesh leaf built while the search runs (taking it to find
+// nothing) must not be what comes back.
+TEST(Ffd, CrossingShellsTheLatticeMakesAreRefused) {
+  Builder b(kT);
+  const NodeId child = b.unite({b.point({-0.5, 0, 0}, {0.6}), b.point({0.5, 0, 0}, {0.6})});
+  const dvec3 lo(-1, -1, -1), hi(1, 1, 1);
+  auto pts = linear_lattice(lo, hi, {2, 1, 1}, {1, 1, 1});
+  for (std::size_t i = 0; i < pts.size(); i += 3) pts[i + 1].x = 1.0, pts[i + 2].x = -1.0;  // x folds back at 0
+  const NodeId ffd = b.ffd(child, lo, hi, {2, 1, 1}, pts, {0.1, 1.0});
+  const Tree t = b.build(ffd);
+  PolygonizeOptions o;
+  o.precision = 0.05;
+  const TriangleMesh balls = polygonize(t.graph_ptr(), child, kT, o);
+  ASSERT_EQ(check_mesh(balls).components, 2u);
+  EXPECT_THROW(deform_child_mesh(t.graph_ptr(), ffd, balls, 0.0, kT), PolygonizeError);
+}
