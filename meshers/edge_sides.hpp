@@ -24,4 +24,15 @@ struct Side {
 /// each vertex's few sides sorted by the upper one); parallel inside.
 std::vector<Side> sides_by_edge(std::size_t vertices, std::span<const glm::uvec3> triangles);
 
+/// Calls f(run) for each edge in turn, `run` its sides (consecutive in sides_by_edge's order).
+template <class F>
+void for_each_edge(std::span<const Side> sides, F&& f) {
+  for (std::size_t i = 0; i < sides.size();) {
+    std::size_t j = i + 1;
+    while (j < sides.size() && sides[j].lo == sides[i].lo && sides[j].hi == sides[i].hi) ++j;
+    f(sides.subspan(i, j - i));
+    i = j;
+  }
+}
+
 }  // namespace ht

@@ -52,18 +52,13 @@ std::pair<double, double> min_and_p1(std::vector<float>& angles) {
 
 // Counts edges by use and direction, and joins the triangles across each edge into components.
 void edge_census(const std::vector<Side>& he, UnionFind& tris, MeshChecks& c) {
-  for (std::size_t i = 0; i < he.size();) {
-    std::size_t j = i;
-    while (j < he.size() && he[j].lo == he[i].lo && he[j].hi == he[i].hi) ++j;
+  for_each_edge(he, [&](std::span<const Side> run) {
     ++c.edges;
-    const std::size_t uses = j - i;
-    if (uses == 1) ++c.boundary_edges;
-    if (uses > 2) ++c.nonmanifold_edges;
-    if (uses == 2 && he[i].forward == he[i + 1].forward) ++c.misoriented_edges;
-    const std::uint32_t first = he[i].tri;
-    for (auto it = he.begin() + std::ptrdiff_t(i) + 1; it != he.begin() + std::ptrdiff_t(j); ++it) tris.unite(first, it->tri);
-    i = j;
-  }
+    if (run.size() == 1) ++c.boundary_edges;
+    if (run.size() > 2) ++c.nonmanifold_edges;
+    if (run.size() == 2 && run[0].forward == run[1].forward) ++c.misoriented_edges;
+    for (const Side& s : run.subspan(1)) tris.unite(run[0].tri, s.tri);
+  });
 }
 
 // Vertex fans: the triangles around a vertex, linked through the edges at the vertex, must form
@@ -128,12 +123,7 @@ void component_census(const std::vector<glm::uvec3>& T, const std::vector<Side>&
   c.components = comp_f.size();
   for (std::size_t v = 0; v + 1 < start.size(); ++v)
     if (start[v] != start[v + 1]) ++comp_v[comp_of[incident[start[v]]]];
-  for (std::size_t i = 0; i < he.size();) {
-    std::size_t j = i;
-    while (j < he.size() && he[j].lo == he[i].lo && he[j].hi == he[i].hi) ++j;
-    ++comp_e[comp_of[he[i].tri]];
-    i = j;
-  }
+  for_each_edge(he, [&](std::span<const Side> run) { ++comp_e[comp_of[run[0].tri]]; });
   for (std::size_t k = 0; k < comp_f.size(); ++k) {
     const long chi = comp_v[k] - comp_e[k] + comp_f[k];
     c.euler += chi;

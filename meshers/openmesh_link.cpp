@@ -17,17 +17,14 @@ using HH = TriMesh::HalfedgeHandle;
 bool mates_of(std::size_t vertices, std::span<const glm::uvec3> T, std::vector<std::uint32_t>& mate) {
   const std::vector<Side> sides = sides_by_edge(vertices, T);
   mate.assign(3 * T.size(), kNone);
-  for (std::size_t i = 0; i < sides.size();) {
-    std::size_t j = i + 1;
-    while (j < sides.size() && sides[j].lo == sides[i].lo && sides[j].hi == sides[i].hi) ++j;
-    if (j - i > 2 || (j - i == 2 && sides[i].forward == sides[i + 1].forward)) return false;
-    if (j - i == 2) {
-      const std::uint32_t a = 3 * sides[i].tri + sides[i].corner, b = 3 * sides[i + 1].tri + sides[i + 1].corner;
-      mate[a] = b, mate[b] = a;
-    }
-    i = j;
-  }
-  return true;
+  bool manifold = true;
+  for_each_edge(sides, [&](std::span<const Side> run) {
+    if (run.size() > 2 || (run.size() == 2 && run[0].forward == run[1].forward)) manifold = false;
+    if (run.size() != 2) return;
+    const std::uint32_t a = 3 * run[0].tri + run[0].corner, b = 3 * run[1].tri + run[1].corner;
+    mate[a] = b, mate[b] = a;
+  });
+  return manifold;
 }
 
 std::uint32_t next_in(std::uint32_t s) { return s - s % 3 + (s % 3 + 1) % 3; }
