@@ -37,8 +37,8 @@ static_assert(sizeof(glm::dvec3) == 24 && sizeof(glm::uvec3) == 12, "positions a
 // A new report or statistics field must be stored by the field lists below (and
 // kDiskCacheLayout bumped): these trip when one is added.
 static_assert(sizeof(PolygonizeStats) == 328, "store the new PolygonizeStats field in meshers/disk_cache.cpp");
-static_assert(sizeof(LocalStats) == 480, "store the new LocalStats field in meshers/disk_cache.cpp");
-static_assert(sizeof(NodeReport) == 920, "store the new NodeReport field in meshers/disk_cache.cpp");
+static_assert(sizeof(LocalStats) == 488, "store the new LocalStats field in meshers/disk_cache.cpp");
+static_assert(sizeof(NodeReport) == 928, "store the new NodeReport field in meshers/disk_cache.cpp");
 
 // The field lists: one per struct, read and written through the same list (Io is Writer or
 // Reader; S is const for the writer).
@@ -61,7 +61,7 @@ void local_fields(Io& io, S& l) {
   io(l.stitch.boundary_vertices, l.stitch.welded, l.stitch.inserted, l.stitch.fans, l.stitch.left_open,
      l.stitch.largest_gap);
   io(l.bridge.loops, l.bridge.band_triangles, l.bridge.widest, l.bridge.holes_closed);
-  io(l.remesh.splits, l.remesh.collapses, l.remesh.flips);
+  io(l.remesh.splits, l.remesh.collapses, l.remesh.flips, l.remesh.sliver_fixes);
 }
 
 // Not stored: node (the reusing job's own) and reused (set by the plan).

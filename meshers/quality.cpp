@@ -3,6 +3,7 @@
 
 #include "meshers/relax.hpp"
 #include "meshers/submesh.hpp"
+#include "meshers/triangle_shape.hpp"
 #include "nodes/trimesh.hpp"
 
 #include <glm/geometric.hpp>
@@ -37,23 +38,6 @@ constexpr double kWorseCos = 0.9659258262890683;    // cos 15 degrees: a relaxat
 
 glm::dvec3 g(const TriMesh::Point& p) { return {p[0], p[1], p[2]}; }
 TriMesh::Point om(const glm::dvec3& p) { return {p.x, p.y, p.z}; }
-
-// The cosine of the smallest corner angle of triangle abc: the angle opposite the shortest edge.
-// Cosines order angles the other way round (1 for a degenerate triangle), without atan2 or acos.
-double thinness(const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c) {
-  // The smallest angle faces the shortest side: law of cosines with the other two.
-  const double x = glm::dot(b - c, b - c), y = glm::dot(c - a, c - a), z = glm::dot(a - b, a - b);
-  const double shortest = std::min({x, y, z}), longest = std::max({x, y, z});
-  const double middle = std::max(std::min(x, y), std::min(std::max(x, y), z));
-  const double den = 2.0 * std::sqrt(middle * longest);
-  return den > 0 ? (middle + longest - shortest) / den : 1.0;
-}
-
-glm::dvec3 unit_normal(const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c) {
-  const glm::dvec3 n = glm::cross(b - a, c - a);
-  const double l = glm::length(n);
-  return l > 0 ? n / l : glm::dvec3(0.0);
-}
 
 class Improver {
  public:

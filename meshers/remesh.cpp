@@ -2,6 +2,7 @@
 
 #include "meshers/relax.hpp"
 #include "meshers/submesh.hpp"
+#include "meshers/triangle_shape.hpp"
 #include "nodes/trimesh.hpp"
 #include "runtime/tape_eval.hpp"
 
@@ -19,6 +20,10 @@ constexpr double kCreaseCos = 0.8660254037844387;  // cos 30 degrees
 constexpr double kSlabTargets = 24.0;  // slabs are this many target edge lengths thick
 constexpr int kBandRings = 3;          // rings around the triangles across slabs, remeshed after
 constexpr double kSettled = 1e-3;      // of the target: a Newton step this short is the last
+constexpr double kSliverCos = 0.9659258262890683;     // cos 15 degrees: a thinner face is a sliver
+constexpr double kDegenerateCos = 0.9999619230641713; // cos 0.5 degrees: no collapse leaves a face this thin
+constexpr int kSliverSweeps = 3;       // rounds of sliver removal at most (each stops when none changes)
+constexpr double kTinyEdge = 0.1;      // of the target: a crease point this close to a neighbour may go into it
 constexpr double kShortMove = 0.02;    // of the target: a tangential move this short is not made
 
 glm::dvec3 g(const TriMesh::Point& p) { return {p[0], p[1], p[2]}; }
@@ -32,6 +37,8 @@ class Remesher {
            const TapeEvaluator& field, double T, double target)
       : field_(field), T_(T), L_(target) {
     ok_ = to_openmesh(sub, locked, origin, m_, locked_, origin_);
+    m_.add_property(creased_);
+    for (const auto v : m_.vertices()) m_.property(creased_, v) = false;
     if (ok_) lock_creases();
   }
   bool ok() const { return ok_; }
@@ -43,6 +50,7 @@ class Remesher {
       st.flips += flip();
       relax();
     }
+    st.sliver_fixes += clean_slivers();
   }
 
   // The remeshed triangles, and each vertex's index in the whole mesh (~0u for new ones).
@@ -82,8 +90,10 @@ class Remesher {
     for (std::size_t i = 0; i < candidates.size(); ++i) {
       // The far corners too: a crease may run along the edge itself, both ends on it.
       if (!turns(4 * i, 4 * i + 1) && !turns(4 * i + 2, 4 * i + 3)) continue;
-      m_.property(locked_, candidates[i].a) = true;
-      m_.property(locked_, candidates[i].b) = true;
+      for (const auto v : {candidates[i].a, candidates[i].b}) {
+        m_.property(creased_, v) = !locked(v) || m_.property(creased_, v);
+        m_.property(locked_, v) = true;
+      }
     }
   }
 
@@ -124,6 +134,7 @@ class Remesher {
       if (m_.from_vertex_handle(h) != todo[i].a || m_.to_vertex_handle(h) != todo[i].b) continue;
       const auto v = m_.add_vertex(om(mids[i]));
       m_.property(locked_, v) = false;
+      m_.property(creased_, v) = false;
       m_.property(origin_, v) = ~0u;
       m_.split_edge(todo[i].e, v);
       ++done;
@@ -206,6 +217,105 @@ class Remesher {
     return done;
   }
 
+  glm::dvec3 p(TriMesh::VertexHandle v) const { return g(m_.point(v)); }
+
+  // The thinness of the thinnest face around `from` that survives its collapse into `to` (2 when
+  // one would turn over or come out degenerate).
+  double thinness_after_collapse(TriMesh::VertexHandle from, TriMesh::VertexHandle to) const {
+    double worst = 0;
+    for (const auto f : m_.vf_range(from)) {
+      glm::dvec3 q[3], was[3];
+      int k = 0;
+      bool gone = false;
+      for (const auto v : m_.fv_range(f)) {
+        gone |= v == to;
+        was[k] = p(v);
+        q[k++] = v == from ? p(to) : p(v);
+      }
+      if (gone) continue;
+      const double thin = thinness(q[0], q[1], q[2]);
+      if (thin > kDegenerateCos || glm::dot(unit_normal(q[0], q[1], q[2]), unit_normal(was[0], was[1], was[2])) < 0.5)
+        return 2.0;
+      worst = std::max(worst, thin);
+    }
+    return worst;
+  }
+
+  double ring_thinness(TriMesh::VertexHandle v) const {
+    double worst = 0;
+    for (const auto f : m_.vf_range(v)) {
+      glm::dvec3 q[3];
+      int k = 0;
+      for (const auto w : m_.fv_range(f)) q[k++] = p(w);
+      worst = std::max(worst, thinness(q[0], q[1], q[2]));
+    }
+    return worst;
+  }
+
+  // Needles and caps the isotropic steps leave, mostly beside the locked rim, whose edges (a
+  // scan's own, or an exact seam's) they cannot change: a triangle thinner than kSliverCos loses
+  // the edge whose collapse (from a free corner) leaves the faces around it least thin, when that
+  // is better than they are now; failing that its longest edge is flipped when that makes the
+  // thinner of the two triangles less thin. Nothing moves, so the field is not evaluated.
+  std::size_t clean_slivers() {
+    std::size_t done = 0;
+    for (int sweep = 0; sweep < kSliverSweeps; ++sweep) {
+      std::size_t now = 0;
+      for (const auto f : m_.faces()) {
+        if (m_.status(f).deleted()) continue;
+        TriMesh::HalfedgeHandle h[3];
+        glm::dvec3 q[3];
+        int k = 0;
+        for (const auto he : m_.fh_range(f)) h[k] = he, q[k++] = p(m_.from_vertex_handle(he));
+        if (thinness(q[0], q[1], q[2]) <= kSliverCos) continue;
+        now += collapse_sliver(h) || flip_cap(h, q);
+      }
+      done += now;
+      if (now == 0) break;
+    }
+    return done;
+  }
+
+  bool collapse_sliver(const TriMesh::HalfedgeHandle (&h)[3]) {
+    TriMesh::HalfedgeHandle best;
+    double best_thin = 2.0;
+    for (const auto he : h)
+      for (const auto c : {he, m_.opposite_halfedge_handle(he)}) {
+        const auto from = m_.from_vertex_handle(c), to = m_.to_vertex_handle(c);
+        // A crease point may go into a neighbour this close: the crease moves by less than the
+        // surface error the edge length allows anyway.
+        if (locked(from) && !(m_.property(creased_, from) && m_.calc_edge_length(c) < kTinyEdge * L_)) continue;
+        const double after = thinness_after_collapse(from, to);
+        if (after < best_thin && after < ring_thinness(from) && m_.is_collapse_ok(c)) best_thin = after, best = c;
+      }
+    if (!best.is_valid()) return false;
+    const auto from = m_.from_vertex_handle(best), to = m_.to_vertex_handle(best);
+    if (m_.property(creased_, from) && !locked(to)) m_.property(creased_, to) = m_.property(locked_, to) = true;
+    m_.collapse(best);
+    return true;
+  }
+
+  bool flip_cap(const TriMesh::HalfedgeHandle (&h)[3], const glm::dvec3 (&q)[3]) {
+    int longest = 0;  // h[i] runs from q[i] to q[(i + 1) % 3]
+    for (int i = 1; i < 3; ++i)
+      if (glm::length(q[(i + 1) % 3] - q[i]) > glm::length(q[(longest + 1) % 3] - q[longest])) longest = i;
+    const auto e = m_.edge_handle(h[longest]);
+    if (m_.is_boundary(e) || frozen(e)) return false;
+    const auto o = m_.opposite_halfedge_handle(h[longest]);
+    const glm::dvec3 pa = q[longest], pb = q[(longest + 1) % 3], pc = q[(longest + 2) % 3];
+    const glm::dvec3 pd = p(m_.to_vertex_handle(m_.next_halfedge_handle(o)));
+    const double before = std::max(thinness(pa, pb, pc), thinness(pb, pa, pd));
+    const double after = std::max(thinness(pa, pd, pc), thinness(pd, pb, pc));
+    if (after >= before) return false;
+    // The two new triangles face as the well-shaped neighbour does, within 30 degrees.
+    const glm::dvec3 up = unit_normal(pb, pa, pd);
+    if (glm::dot(unit_normal(pa, pd, pc), up) < kCreaseCos || glm::dot(unit_normal(pd, pb, pc), up) < kCreaseCos)
+      return false;
+    if (!m_.is_flip_ok(e)) return false;
+    m_.flip(e);
+    return true;
+  }
+
   void relax() {
     std::vector<TriMesh::VertexHandle> moving;
     std::vector<glm::dvec3> at;
@@ -248,6 +358,7 @@ class Remesher {
   std::vector<int> valence_;  // flip's: each vertex's valence
   std::vector<glm::dvec3> face_normal_;  // relax's: each face's unit normal before the moves
   OpenMesh::VPropHandleT<bool> locked_;
+  OpenMesh::VPropHandleT<bool> creased_;  // locked by lock_creases() alone (not a rim, not fixed)
   OpenMesh::VPropHandleT<std::uint32_t> origin_;
   const TapeEvaluator& field_;
   double T_, L_;
@@ -275,7 +386,10 @@ void remesh_parts(TriangleMesh& mesh, const Pieces& pieces, std::span<const std:
     r.run(options.iterations, part_stats[i]);
     r.result(changed[i], origin[i]);
   });
-  for (const RemeshStats& p : part_stats) st.splits += p.splits, st.collapses += p.collapses, st.flips += p.flips;
+  for (const RemeshStats& p : part_stats) {
+    st.splits += p.splits, st.collapses += p.collapses, st.flips += p.flips;
+    st.sliver_fixes += p.sliver_fixes;
+  }
   put_back(mesh, pieces, changed, origin, renumber);
 }
 

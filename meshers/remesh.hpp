@@ -3,11 +3,14 @@
 // (the new vertex projected onto {f = T} by Newton steps on the tape), collapse edges shorter
 // than 4/5 (is_collapse_ok, and no triangle turned over), flip edges toward valence 6 where the
 // two triangles are nearly coplanar (is_flip_ok), and relax vertices tangentially, projected
-// back onto the surface. The local strategies run it where they made new triangles: their seams,
-// fans and bands, whose slivers it removes.
+// back onto the surface. Last, the slivers those rounds leave (under 15 degrees, mostly beside the
+// locked rim) lose an edge by a collapse from a free corner, or their longest edge by a flip, when
+// that leaves the faces around less thin. The local strategies run it where they made new
+// triangles: their seams, fans and bands, whose slivers it removes.
 //
 // What stays: every vertex outside the region, every `fixed` vertex (exact seams), every vertex on
-// a crease (an edge whose triangles meet at more than 30 degrees), and every edge between two of
+// a crease (an edge whose triangles meet at more than 30 degrees; such a point may only go into a
+// neighbour a tenth of the target away), and every edge between two of
 // those. The region's boundary therefore does not move, and
 // vertices outside it keep their positions bit for bit (their indices may change).
 //
@@ -34,6 +37,7 @@ struct RemeshOptions {
 
 struct RemeshStats {
   std::size_t splits = 0, collapses = 0, flips = 0;
+  std::size_t sliver_fixes = 0;  ///< slivers collapsed or flipped after the isotropic rounds
 };
 
 /// Remeshes the triangles with a corner in `region` (one flag per vertex); `fixed` vertices do
