@@ -120,8 +120,9 @@ std::size_t snap_vertices(std::vector<glm::dvec3>& pos, std::vector<std::int8_t>
     const double t = x.t[i];
     const double len = glm::length(pos[x.cut_end[i]] - pos[x.kept_end[i]]);
     const std::uint32_t a = x.kept_end[i], b = x.cut_end[i];
-    if (t < best[a] && t * len <= o.snap_distance) best[a] = t, pick[a] = i, end[a] = 0;
-    if (1.0 - t < best[b] && (1.0 - t) * len <= o.snap_distance) best[b] = 1.0 - t, pick[b] = i, end[b] = 1;
+    auto reach = [&](std::uint32_t v) { return v >= o.snap_freely_from ? len : o.snap_distance; };
+    if (t < best[a] && t * len <= reach(a)) best[a] = t, pick[a] = i, end[a] = 0;
+    if (1.0 - t < best[b] && (1.0 - t) * len <= reach(b)) best[b] = 1.0 - t, pick[b] = i, end[b] = 1;
   }
   const std::vector<glm::dvec3> before = pos;
   std::size_t moved = 0;

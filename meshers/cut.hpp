@@ -27,6 +27,10 @@ struct CutOptions {
   /// ... if that is no farther than this (world units): moving a vertex bends its other faces,
   /// which on a coarse mesh would leave the surface by a fraction of its long edges.
   double snap_distance = std::numeric_limits<double>::infinity();
+  /// Vertices from this index on (a refinement's own, not the input's) snap within `snap` of an
+  /// edge at any distance: they lie inside the input's faces or on its edges, so moving one bends
+  /// the faces around it only by the turn between two neighbouring faces of the input.
+  std::size_t snap_freely_from = std::numeric_limits<std::size_t>::max();
   int refine_steps = 20;        ///< at most this many false-position steps per crossing edge
   double refine_tolerance = 1e-4;  ///< of c's change along the edge, or of the edge's length
 };

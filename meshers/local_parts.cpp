@@ -60,7 +60,9 @@ TriangleMesh refined_and_cut(const TriangleMesh& mesh, const LocalInput& in, Nod
   values.resize(r.positions.size());
   if (r.positions.size() > n)
     cut(std::span(r.positions).subspan(n), std::span(values).subspan(n));
-  return cut_mesh(r, values, cut, cut_options(in));
+  CutOptions o = cut_options(in);
+  o.snap_freely_from = n;
+  return cut_mesh(r, values, cut, o);
 }
 
 void flip(TriangleMesh& m) {

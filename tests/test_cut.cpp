@@ -9,8 +9,10 @@
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
 
+#include <array>
 #include <atomic>
 #include <cmath>
+#include <set>
 
 using namespace ht;
 
@@ -76,4 +78,40 @@ TEST(Cut, SnappingSearchesNoRootTwice) {
   EXPECT_EQ(with.root_evaluations, without.root_evaluations);
   EXPECT_TRUE(check_mesh(a).manifold());
   EXPECT_LT(a.positions.size(), b.positions.size());
+}
+
+// A refinement's own vertices (from CutOptions::snap_freely_from on) snap at any distance; the
+// input's keep the distance bound, so each kept one before that index stays bit for bit.
+TEST(Cut, OnlyTheRefinementsVerticesSnapBeyondTheDistance) {
+  const TriangleMesh m = sphere(0.02);
+  const BatchField c = [](std::span<const glm::dvec3> points, std::span<double> values) {
+    for (std::size_t i = 0; i < points.size(); ++i) values[i] = -tail(points[i]);
+  };
+  auto cut = [&](std::size_t from, CutStats& st) {
+    CutOptions o;
+    o.snap_distance = 0.0;
+    o.snap_freely_from = from;
+    return cut_mesh(m, c, o, &st);
+  };
+  const std::size_t n = m.positions.size();
+  CutStats none, all, half, unbounded;
+  cut(n, none);
+  cut(0, all);
+  const TriangleMesh out = cut(n / 2, half);
+  CutOptions anywhere;  // the default: no distance bound for anyone
+  cut_mesh(m, c, anywhere, &unbounded);
+  EXPECT_EQ(none.snapped_vertices, 0u);
+  EXPECT_EQ(all.snapped_vertices, unbounded.snapped_vertices);
+  EXPECT_GT(half.snapped_vertices, 0u);
+  EXPECT_LT(half.snapped_vertices, all.snapped_vertices);
+  std::set<std::array<double, 3>> kept;
+  for (const glm::dvec3& p : out.positions) kept.insert({p.x, p.y, p.z});
+  std::size_t checked = 0;
+  for (std::size_t v = 0; v < n / 2; ++v) {
+    const glm::dvec3& p = m.positions[v];
+    if (tail(p) <= 0) continue;  // cut away (c = -tail >= 0)
+    ++checked;
+    EXPECT_TRUE(kept.count({p.x, p.y, p.z})) << "input vertex " << v << " moved";
+  }
+  EXPECT_GT(checked, 100u);
 }
