@@ -351,6 +351,7 @@ TEST(LocalStrategies, RandomTreesWithMeshLeavesStayClosed) {
       }
       const MeshChecks k = check_mesh(*r.mesh);
       EXPECT_TRUE(k.watertight()) << "tree " << i;
+      EXPECT_EQ(k.self_intersecting_pairs, 0u) << "tree " << i;
       for (const NodeReport& e : r.nodes) {
         ++jobs;
         if (e.reason == JobReason::Fallback)
