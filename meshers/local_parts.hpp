@@ -70,7 +70,7 @@ TriangleMesh refined_and_cut(const TriangleMesh& mesh, const LocalInput& in, Nod
 void flip(TriangleMesh& m);
 bool overlaps(const Aabb& a, const Aabb& b);
 /// The node's own surface, polygonized only inside `clip`, in the bricks `wanted` accepts, at
-/// the operands' edge length there (at most 4x finer than h), sharp features only if `sharp`.
+/// the operands' edge length there (at most 2x finer than h), sharp features only if `sharp`.
 TriangleMesh patch(const LocalInput& in, const Aabb& clip, std::function<bool(const Aabb&)> wanted, LocalStats& st,
                    bool sharp);
 /// Seams of this node: gaps up to 3/4 of the precision; `onto_earlier` where the pieces meet
