@@ -267,6 +267,24 @@ TEST(LocalCrops, PrimitivesAndMeshLeaves) {
 }
 
 // The paper's Figure 5: a union, blended only where the region reaches.
+// A blend's patch is polygonized at its operands' median edge length there, but never finer than
+// half the precision: bunny00's edges near the ear (median about 0.0075) set it at h = 0.008,
+// the clamp at h = 0.04 (at h / 4, the old clamp, 0.01 there: four times the cells of h / 2 for
+// a surface finer than asked).
+TEST(LocalBlends, PatchIsAtMostTwiceFinerThanThePrecision) {
+  for (const double h : {0.008, 0.04}) {
+    Builder b(kT);
+    const NodeId root = b.blend({b.mesh(bunny(), {0.05}), b.point(kEar, {0.12})});
+    const Tree t = b.build(root);
+    const MeshResult r = mesh_tree(t, at(h, MeshStrategy::Local));
+    const NodeReport& e = report_of(r, root);
+    ASSERT_EQ(e.strategy, JobStrategy::TrimBlend) << h;
+    EXPECT_TRUE(check_mesh(*r.mesh).watertight()) << h;
+    if (h == 0.04) EXPECT_DOUBLE_EQ(e.local.patch_precision, 0.5 * h);
+    else EXPECT_TRUE(e.local.patch_precision > 0.5 * h && e.local.patch_precision < h) << e.local.patch_precision;
+  }
+}
+
 TEST(LocalBlends, LocalBlendIsAUnionOutsideItsRegion) {
   const std::vector<Case> cases = {
       {"crossed capsules", 0,
