@@ -23,11 +23,11 @@ TEST(Examples, EveryExampleMeshesClosedOnItsSurface) {
     if (e.path().extension() == ".json") scenes.push_back(e.path());
   std::sort(scenes.begin(), scenes.end());
   ASSERT_GE(scenes.size(), 6u);
-  const bool igea = std::filesystem::exists(std::filesystem::path(HYBRIDTREE_SOURCE_DIR) / "data/meshes/igea-67k.ply");
+  const bool igea = test::igea_available();
   for (const auto& file : scenes) {
     SCOPED_TRACE(file.filename().string());
     // Igea comes from ../shared beside the checkout; where that is missing, so are its scenes.
-    if (!igea && test::shared_mesh("igea-67k.ply").empty() &&
+    if (!igea &&
         (file.filename() == "bowl.json" || file.filename() == "restoration.json" ||
          file.filename() == "snake_woman.json" || file.filename() == "spiky_snake_woman.json")) {
       std::printf("skipping %s: no igea-67k.ply in data/meshes/ or ../shared\n", file.filename().c_str());
@@ -56,8 +56,7 @@ TEST(Examples, TheFfdSceneStaysIntersectionFreeAcrossPrecisions) {
   // At 0.071 and 0.065 the lattice closed three and two folds the snake-woman's blend band all but
   // made (before the deformed mesh was unfolded); the spiky scene must come out clean at each.
   const auto file = std::filesystem::path(HYBRIDTREE_SOURCE_DIR) / "examples/spiky_snake_woman.json";
-  if (!std::filesystem::exists(std::filesystem::path(HYBRIDTREE_SOURCE_DIR) / "data/meshes/igea-67k.ply") &&
-      test::shared_mesh("igea-67k.ply").empty())
+  if (!test::igea_available())
     GTEST_SKIP() << "no igea-67k.ply in data/meshes/ or ../shared";
   const Tree tree = load_scene(file);
   for (double h : {0.071, 0.065}) {

@@ -17,6 +17,7 @@
 #include <numeric>
 #include <random>
 #include <cmath>
+#include <cstdio>
 #include <filesystem>
 #include <vector>
 
@@ -224,10 +225,15 @@ TEST(MeshChecks, BlendsOfScansLeaveNoSliverAwayFromCreases) {
   struct Scene {
     const char* name;
     double min, p1;
+    bool igea = false;  // skipped where Igea is missing (tests/support/test_support.hpp)
   };
   for (const Scene& s : {Scene{"bunny_ear.json", 2.0, 25.0}, Scene{"bunny_garden.json", 8.0, 25.0},
-                         Scene{"winged_bunny.json", 5.0, 22.0}, Scene{"restoration.json", 10.0, 25.0},
-                         Scene{"snake_woman.json", 5.0, 30.0}, Scene{"bowl.json", 4.0, 30.0}}) {
+                         Scene{"winged_bunny.json", 5.0, 22.0}, Scene{"restoration.json", 10.0, 25.0, true},
+                         Scene{"snake_woman.json", 5.0, 30.0, true}, Scene{"bowl.json", 4.0, 30.0, true}}) {
+    if (s.igea && !test::igea_available()) {
+      std::printf("skipping %s: no igea-67k.ply in data/meshes/ or ../shared\n", s.name);
+      continue;
+    }
     const Tree tree = load_scene(std::filesystem::path(HYBRIDTREE_SOURCE_DIR) / "examples" / s.name);
     const MeshRun run = run_mesh(tree, {});
     const MeshChecks& c = run.checks;

@@ -28,6 +28,11 @@ std::filesystem::path shared_mesh(const std::string& name) {
   return std::filesystem::exists(p) ? p : std::filesystem::path();
 }
 
+bool igea_available() {
+  return std::filesystem::exists(std::filesystem::path(HYBRIDTREE_SOURCE_DIR) / "data/meshes/igea-67k.ply") ||
+         !shared_mesh("igea-67k.ply").empty();
+}
+
 std::filesystem::path temp_dir(const std::string& tag) {
   auto p = std::filesystem::temp_directory_path() / ("hybridtree-test-" + tag + "-" +
                                                      std::to_string(::getpid()));

@@ -18,6 +18,10 @@ namespace ht::test {
 std::filesystem::path cgal_mesh(const std::string& name);
 /// ../shared/data/meshes/NAME beside the checkout, or empty when absent.
 std::filesystem::path shared_mesh(const std::string& name);
+/// Whether Igea (igea-67k.ply, from ../shared beside the checkout) is in data/meshes/ or
+/// ../shared: the examples that stand for the paper's Igea scenes (bowl, restoration, both
+/// snake-women) load it; where it is missing, so are they.
+bool igea_available();
 /// A fresh empty folder for one test's files.
 std::filesystem::path temp_dir(const std::string& tag);
 /// Writes text to a file.
