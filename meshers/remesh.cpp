@@ -23,7 +23,7 @@ constexpr double kSettled = 1e-3;      // of the target: a Newton step this shor
 constexpr double kSliverCos = 0.9659258262890683;     // cos 15 degrees: a thinner face is a sliver
 constexpr double kDegenerateCos = 0.9999619230641713; // cos 0.5 degrees: no collapse leaves a face this thin
 constexpr int kSliverSweeps = 3;       // rounds of sliver removal at most (each stops when none changes)
-constexpr double kTinyEdge = 0.1;      // of the target: a crease point this close to a neighbour may go into it
+constexpr double kTinyEdge = 0.3;      // of the target: a crease point this close to a neighbour may go into it
 constexpr double kShortMove = 0.02;    // of the target: a tangential move this short is not made
 
 glm::dvec3 g(const TriMesh::Point& p) { return {p[0], p[1], p[2]}; }
@@ -282,8 +282,10 @@ class Remesher {
     for (const auto he : h)
       for (const auto c : {he, m_.opposite_halfedge_handle(he)}) {
         const auto from = m_.from_vertex_handle(c), to = m_.to_vertex_handle(c);
-        // A crease point may go into a neighbour this close: the crease moves by less than the
-        // surface error the edge length allows anyway.
+        // A crease point may go into a neighbour this close (only for a sliver, and only when the
+        // faces around get less thin). Measured on the examples: at 0.1, 0.2 and 0.3 of the
+        // target every largest and mean face error stayed or shrank; at 0.5 the largest grew
+        // (restoration 1.6e-4 -> 3.4e-4) as crease points went too far.
         if (locked(from) && !(m_.property(creased_, from) && m_.calc_edge_length(c) < kTinyEdge * L_)) continue;
         const double after = thinness_after_collapse(from, to);
         if (after < best_thin && after < ring_thinness(from) && m_.is_collapse_ok(c)) best_thin = after, best = c;

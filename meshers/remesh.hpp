@@ -10,7 +10,7 @@
 //
 // What stays: every vertex outside the region, every `fixed` vertex (exact seams), every vertex on
 // a crease (an edge whose triangles meet at more than 30 degrees; such a point may only go into a
-// neighbour a tenth of the target away), and every edge between two of
+// neighbour 0.3 of the target away), and every edge between two of
 // those. The region's boundary therefore does not move, and
 // vertices outside it keep their positions bit for bit (their indices may change).
 //
