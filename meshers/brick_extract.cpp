@@ -178,9 +178,12 @@ std::size_t place_vertices(const Grid& grid, glm::ivec3 b, std::uint32_t brick_i
   side.assign(nv, 0);
   sc.probed.assign(nv, 0);
   for (auto* v : {&sc.xs, &sc.ys, &sc.zs, &sc.fv}) v->resize(nv);
+  // An edge to a point that was not sampled (NaN: outside the octants a filter wanted) keeps
+  // its midpoint: its sign change is not the surface's, and the caller cuts it away.
   auto& live = sc.live;
-  live.resize(nv);
-  std::iota(live.begin(), live.end(), 0u);
+  live.clear();
+  for (std::uint32_t v = 0; v < nv; ++v)
+    if (!std::isnan(fb[v])) live.push_back(v);
   std::size_t evaluations = 0;
   for (int step = 0; step < refine.steps && !live.empty(); ++step) {
     const std::size_t nl = live.size();
@@ -245,6 +248,43 @@ std::size_t place_vertices(const Grid& grid, glm::ivec3 b, std::uint32_t brick_i
     out.vertices[v] = {sc.keys[sc.unique[v]], brick_index, pa[v] + std::clamp(t[v], kMargin, 1.0 - kMargin) * (pb[v] - pa[v]),
                        glm::vec3(0.0f)};
   return evaluations;
+}
+
+std::size_t drop_unsampled(const Grid& grid, glm::ivec3 b, const float* own, std::uint8_t octants, const Scratch& sc,
+                           BrickOutput& out) {
+  const glm::i64vec3 base = glm::i64vec3(b) * std::int64_t(kCells);
+  auto unsampled = [&](std::uint64_t key) {
+    const std::uint64_t lower = key / 8, dir = key % 8;
+    const glm::i64vec3 p(std::int64_t(lower % std::uint64_t(grid.points.x)),
+                         std::int64_t((lower / std::uint64_t(grid.points.x)) % std::uint64_t(grid.points.y)),
+                         std::int64_t(lower / std::uint64_t(grid.points.x * grid.points.y)));
+    const glm::ivec3 a(p - base), d(int(dir & 1), int((dir >> 1) & 1), int((dir >> 2) & 1));
+    return std::isnan(own[local_index(a)]) || std::isnan(own[local_index(a + d)]);
+  };
+  // Triangles by cell (march's order): a cell of an octant left out goes whole, even where its
+  // corners were sampled for the octants beside it.
+  constexpr int half = kCells / 2;
+  std::vector<std::uint8_t> drop(out.triangles.size(), 0);
+  std::size_t dropped = 0;
+  for (int c = 0; c < kCells * kCells * kCells; ++c) {
+    const int x = c % kCells, y = (c / kCells) % kCells, z = c / (kCells * kCells);
+    const bool wanted = (octants >> ((x >= half) + 2 * (y >= half) + 4 * (z >= half))) & 1;
+    for (std::uint32_t i = sc.cell_begin[std::size_t(c)]; i < sc.cell_begin[std::size_t(c) + 1]; ++i) {
+      const auto& t = out.triangles[i];
+      drop[i] = !wanted || unsampled(t[0]) || unsampled(t[1]) || unsampled(t[2]);
+      dropped += drop[i];
+    }
+  }
+  if (dropped == 0) return 0;
+  std::size_t kept = 0;
+  for (std::size_t i = 0; i < out.triangles.size(); ++i)
+    if (!drop[i]) out.triangles[kept++] = out.triangles[i];
+  out.triangles.resize(kept);
+  std::vector<std::uint64_t> used;
+  for (const auto& t : out.triangles) used.insert(used.end(), t.begin(), t.end());
+  std::sort(used.begin(), used.end());
+  std::erase_if(out.vertices, [&](const EdgeVertex& v) { return !std::binary_search(used.begin(), used.end(), v.key); });
+  return dropped;
 }
 
 void crease_normals(const float* own, const TapeEvaluator& eval, const FeatureOptions& options, Scratch& sc,

@@ -98,10 +98,18 @@ void march(const Grid& grid, glm::ivec3 b, const std::uint8_t* label, Scratch& s
 
 /// One vertex per distinct edge of march(): false position along the edge on `eval` (the
 /// brick's tape) from the brick's samples `own`, threshold T; fills out.vertices, sorted by key.
-/// Returns the number of field values it evaluated.
+/// A NaN sample is a point not evaluated (outside, PolygonizeOptions::brick_filter): a vertex on
+/// an edge to it stays at the edge's midpoint. Returns the number of field values it evaluated.
 std::size_t place_vertices(const Grid& grid, glm::ivec3 b, std::uint32_t brick_index, const float* own,
                     const std::uint8_t* label, const TapeEvaluator& eval, double T, const Refine& refine,
                     Scratch& scratch, BrickOutput& out);
+
+/// Takes out of brick b's output (as march() and place_vertices() left it, with `scratch`) the
+/// triangles of the cells outside the octants `octants` names (PolygonizeOptions::brick_filter)
+/// and those with a vertex on an edge to a point not sampled (NaN in `own`), then the vertices
+/// only they used: their sign changes are not the surface's. Returns how many triangles went.
+std::size_t drop_unsampled(const Grid& grid, glm::ivec3 b, const float* own, std::uint8_t octants,
+                           const Scratch& scratch, BrickOutput& out);
 
 /// Exact outward normals (forward-mode gradients on `eval`) for the vertices of the cells whose
 /// sampled gradients spread (meshers/features.hpp mark_suspect_cells); the others keep none.

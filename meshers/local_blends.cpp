@@ -83,16 +83,23 @@ TriangleMesh blend_patch(const LocalInput& in, const BlendFields& bf, const std:
   const Graph* graph = in.graph.get();
   const auto c = graph->children_of(in.node);
   const double margin = 2.0 * in.precision, T = in.threshold, eps = bf.eps;
-  // Only bricks where two operands may both reach eps (interval analysis), two cells wider.
-  const TriangleMesh p = patch(in, clip, [meets, graph, c, eps, margin, T](const Aabb& brick) {
-    if (std::none_of(meets.begin(), meets.end(), [&](const Aabb& m) { return overlaps(m, brick); })) return false;
-    const Aabb wide = brick.expanded(margin);
-    int acting = 0;
+  // The patch's cut keeps where the operands' |f| but the largest add up to eps: so may they in
+  // a box where their bounds on |f| (interval analysis) do. Tested on the octants of each brick,
+  // two cells wider: on whole bricks, 42 to 88% of the patch's triangles on the examples lay
+  // where the cut then took them away.
+  auto two_act = [graph, c, eps, T](const Aabb& box) {
+    double sum = 0.0, largest = 0.0;
     for (NodeId child : c) {
-      const Interval iv = field_interval(*graph, child, T, wide, true);
-      acting += iv.hi >= eps || iv.lo <= -eps;
+      const Interval iv = field_interval(*graph, child, T, box, true);
+      const double bound = std::max(iv.hi, -iv.lo);
+      sum += bound;
+      largest = std::max(largest, bound);
     }
-    return acting >= 2;
+    return sum - largest >= eps;
+  };
+  const TriangleMesh p = patch(in, clip, [meets, margin, two_act](const Aabb& brick) -> std::uint8_t {
+    if (std::none_of(meets.begin(), meets.end(), [&](const Aabb& m) { return overlaps(m, brick); })) return 0;
+    return octants_where(brick, margin, two_act);
   }, st, false);  // a blend is smooth where operands meet
   TriangleMesh side = pull_back_boundary(cut_mesh(p, bf.cut(c.size()), cut_options(in)));
   relax_boundary(side, field, T);
@@ -204,7 +211,8 @@ TriangleMesh trim_local_blend(const LocalInput& in, LocalStats* stats) {
     const NodeId region = c[2];
     const double margin = 2.0 * in.precision;
     const TriangleMesh p = patch(in, acts, [graph, region, T, eps, margin](const Aabb& brick) {
-      return field_interval(*graph, region, T, brick.expanded(margin), true).hi >= eps;
+      return octants_where(brick, margin,
+                           [&](const Aabb& box) { return field_interval(*graph, region, T, box, true).hi >= eps; });
     }, st, true);  // where the region fades out the surface turns into the union's crease
     const BatchField in_region = [fr, eps](std::span<const glm::dvec3> points, std::span<double> values) {
       fr(points, values);

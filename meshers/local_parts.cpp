@@ -1,5 +1,6 @@
 #include "meshers/local_parts.hpp"
 
+#include "meshers/polygonize.hpp"
 #include "meshers/relax.hpp"
 #include "meshers/warp_mesh.hpp"
 #include "runtime/tape.hpp"
@@ -97,8 +98,8 @@ double patch_precision(const LocalInput& in, const Aabb& box) {
 }  // namespace
 
 // The surface of the node itself, polygonized only inside `clip`, in the bricks `wanted` accepts.
-TriangleMesh patch(const LocalInput& in, const Aabb& clip, std::function<bool(const Aabb&)> wanted, LocalStats& st,
-                   bool sharp) {
+TriangleMesh patch(const LocalInput& in, const Aabb& clip, std::function<std::uint8_t(const Aabb&)> wanted,
+                   LocalStats& st, bool sharp) {
   PolygonizeOptions o = in.polygonize;
   o.sharp_features = o.sharp_features && sharp;
   o.precision = patch_precision(in, clip);
@@ -108,6 +109,14 @@ TriangleMesh patch(const LocalInput& in, const Aabb& clip, std::function<bool(co
   o.progress = {};
   st.patched = true;
   return polygonize(in.graph, in.node, in.threshold, o, &st.patch);
+}
+
+std::uint8_t octants_where(const Aabb& brick, double margin, const std::function<bool(const Aabb&)>& acts) {
+  if (!acts(brick.expanded(margin))) return 0;
+  std::uint8_t mask = 0;
+  for (int k = 0; k < 8; ++k)
+    if (acts(octants::of(brick, k).expanded(margin))) mask = std::uint8_t(mask | (1u << k));
+  return mask;
 }
 
 // Seams of this node: gaps up to 3/4 of the precision; `onto_earlier` where the pieces meet

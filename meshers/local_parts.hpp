@@ -71,8 +71,12 @@ void flip(TriangleMesh& m);
 bool overlaps(const Aabb& a, const Aabb& b);
 /// The node's own surface, polygonized only inside `clip`, in the bricks `wanted` accepts, at
 /// the operands' edge length there (at most 2x finer than h), sharp features only if `sharp`.
-TriangleMesh patch(const LocalInput& in, const Aabb& clip, std::function<bool(const Aabb&)> wanted, LocalStats& st,
-                   bool sharp);
+TriangleMesh patch(const LocalInput& in, const Aabb& clip, std::function<std::uint8_t(const Aabb&)> wanted,
+                   LocalStats& st, bool sharp);
+/// The octants of `brick` (octants::of) on which `acts`, given an octant's box widened by
+/// `margin`, may be true; none when it may not be on the whole brick widened so. A patch's
+/// filter: the interval bounds it rests on loosen with the box.
+std::uint8_t octants_where(const Aabb& brick, double margin, const std::function<bool(const Aabb&)>& acts);
 /// Seams of this node: gaps up to 3/4 of the precision; `onto_earlier` where the pieces meet
 /// smoothly, not at a crease (meshers/stitch.hpp).
 StitchOptions seam_options(const LocalInput& in, bool onto_earlier);

@@ -216,6 +216,19 @@ void snap_phase(const Grid& grid, const std::vector<EdgeVertex>& all, const Feat
   snap_to_grid_points(mesh, near, normals, snapped, on_bricks, field.threshold(), grid.h, options, &stats.snap);
 }
 
+// The octants of a brick (octants::of) whose closed boxes hold its local grid point (i, j, k).
+std::uint8_t octants_at(int i, int j, int k) {
+  constexpr int half = kCells / 2;
+  std::uint8_t mask = 0;
+  for (int o = 0; o < 8; ++o) {
+    const int c[3] = {i, j, k};
+    bool in = true;
+    for (int a = 0; a < 3; ++a) in = in && (((o >> a) & 1) ? c[a] >= half : c[a] <= half);
+    if (in) mask = std::uint8_t(mask | (1u << o));
+  }
+  return mask;
+}
+
 // Folds left by the crease step or the quality pass: collapsed (meshers/unfold.hpp), and where
 // collapses are stuck, the vertices around them relaxed apart (meshers/relax.hpp untangle, crease
 // points sliding along their crease), in turns. `pairs` holds every intersecting pair and
@@ -323,6 +336,17 @@ void quality_phase(SurfaceField& field, RootField& root_field, double h, const Q
 
 }  // namespace
 
+Aabb octants::of(const Aabb& box, int k) {
+  const glm::dvec3 mid = box.center();
+  Aabb out;
+  for (int a = 0; a < 3; ++a) {
+    const bool upper = (k >> a) & 1;
+    out.lo[a] = upper ? mid[a] : box.lo[a];
+    out.hi[a] = upper ? box.hi[a] : mid[a];
+  }
+  return out;
+}
+
 TriangleMesh polygonize(std::shared_ptr<const Graph> graph, NodeId root, double T, const PolygonizeOptions& options,
                         PolygonizeStats* stats_out) {
   PolygonizeStats stats;
@@ -372,11 +396,20 @@ TriangleMesh polygonize(std::shared_ptr<const Graph> graph, NodeId root, double 
   std::vector<std::uint32_t> active;
   // Bricks the filter rejects stay kActive with no slot: their shared grid points then take the
   // label of the brick that sampled them (they lie where the caller cuts the patch away).
-  for (std::size_t i = 0; i < state.size(); ++i)
-    if (state[i] == kActive) {
-      const glm::ivec3 b = grid.brick_at(i);
-      if (!options.brick_filter || options.brick_filter(grid.box(b, b + 1))) active.push_back(static_cast<std::uint32_t>(i));
-    }
+  std::vector<std::uint8_t> wanted;  // per active brick: the octants the filter named
+  {
+    std::vector<std::uint32_t> candidates;
+    for (std::size_t i = 0; i < state.size(); ++i)
+      if (state[i] == kActive) candidates.push_back(static_cast<std::uint32_t>(i));
+    std::vector<std::uint8_t> mask(candidates.size(), octants::kAll);
+    if (options.brick_filter)
+      tbb::parallel_for(std::size_t(0), candidates.size(), [&](std::size_t c) {
+        const glm::ivec3 b = grid.brick_at(candidates[c]);
+        mask[c] = options.brick_filter(grid.box(b, b + 1));
+      });
+    for (std::size_t c = 0; c < candidates.size(); ++c)
+      if (mask[c]) active.push_back(candidates[c]), wanted.push_back(mask[c]);
+  }
   stats.bricks_active = active.size();
   const MemoryReservation working(budget, double(active.size()) * 12288.0,
                                   "precision " + std::to_string(h) + ": the " + std::to_string(active.size()) +
@@ -442,6 +475,9 @@ TriangleMesh polygonize(std::shared_ptr<const Graph> graph, NodeId root, double 
   }
   // Evaluates brick a's points whose sampled owner is `owner` (kNone: a itself, or an owner that
   // was not sampled) with `eval`, into a's values; returns how many.
+  // A point outside the octants its brick wants is not evaluated: NaN, which reads as outside
+  // and leaves the vertices on its edges unrefined (meshers/brick_extract.hpp).
+  const float skipped = std::numeric_limits<float>::quiet_NaN();
   auto sample = [&](std::size_t a, const TapeEvaluator& eval, std::uint32_t owner) {
     const glm::ivec3 b = grid.brick_at(active[a]);
     float xs[kBrickPoints], ys[kBrickPoints], zs[kBrickPoints], fs[kBrickPoints];
@@ -452,6 +488,10 @@ TriangleMesh polygonize(std::shared_ptr<const Graph> graph, NodeId root, double 
         for (int i = 0; i < kPoints; ++i, ++n) {
           std::size_t at = 0;
           if (sampled_owner(b, {i, j, k}, at) != owner) continue;
+          if (!(wanted[a] & octants_at(i, j, k))) {
+            values[a * kBrickPoints + std::size_t(n)] = skipped;
+            continue;
+          }
           const glm::dvec3 p = grid.position(glm::i64vec3(b) * std::int64_t(kCells) + glm::i64vec3(i, j, k));
           which[m] = static_cast<std::uint16_t>(n);
           xs[m] = static_cast<float>(p.x);
@@ -543,6 +583,7 @@ TriangleMesh polygonize(std::shared_ptr<const Graph> graph, NodeId root, double 
                                      {options.refine_steps, options.refine_tolerance}, sc, out);
     // Exact normals for the vertices of cells that may hold a crease (meshers/features.hpp).
     if (options.sharp_features && may_have_creases(*tapes[a])) brick::crease_normals(own, eval, options.features, sc, out);
+    if (options.brick_filter) brick::drop_unsampled(grid, b, own, wanted[a], sc, out);
     if (!keys.empty())
       if (auto k = std::make_shared<const brick::KeptBrick>(brick::KeptBrick{out, boundary})) {
         const std::size_t bytes = brick::kept_bytes(*k);

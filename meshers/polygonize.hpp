@@ -55,10 +55,13 @@ struct PolygonizeOptions {
   QualityOptions quality;
   /// Called from the calling thread with the fraction done, at most about 100 times.
   std::function<void(double)> progress;
-  /// When set, only the bricks it accepts are meshed: the result is the part of the surface in
-  /// those bricks, open where they end (the local strategies mesh a patch this way and cut it,
-  /// meshers/local_ops.hpp). Called with each brick's box, from any thread.
-  std::function<bool(const Aabb&)> brick_filter;
+  /// When set, only the bricks it accepts are meshed, and in them only the octants it names: the
+  /// result is the part of the surface there, open where they end (the local strategies mesh a
+  /// patch this way and cut it, meshers/local_ops.hpp). Called with each brick's box, from any
+  /// thread; returns one bit per octant of the brick (namespace octants), 0 for none. Grid
+  /// points outside the named octants are not evaluated, and the triangles of their cells and of
+  /// the cells that read them are left out (so a patch is also open within a cell of them).
+  std::function<std::uint8_t(const Aabb&)> brick_filter;
   /// When not empty, only the part of the domain inside this box is gridded (with the filter, a
   /// patch costs what its region costs, not what the node's whole solid would).
   Aabb clip;
@@ -70,6 +73,14 @@ struct PolygonizeOptions {
   /// byte for byte, with or without it. Not used with a brick_filter or a clip.
   PieceCache* pieces = nullptr;
 };
+
+/// A brick's octants for PolygonizeOptions::brick_filter: bit i + 2 j + 4 k is the octant on the
+/// upper half of the x axis when i is 1, of y when j is, of z when k is.
+namespace octants {
+inline constexpr std::uint8_t kAll = 0xff;
+/// Octant `k`'s box in `box` (k as the bits above).
+Aabb of(const Aabb& box, int k);
+}  // namespace octants
 
 struct PolygonizeStats {
   std::size_t bricks_total = 0, bricks_active = 0;

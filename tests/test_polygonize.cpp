@@ -14,8 +14,12 @@
 #include <gtest/gtest.h>
 #include <tbb/task_arena.h>
 
+#include <algorithm>
 #include <cmath>
+#include <mutex>
 #include <numbers>
+#include <set>
+#include <tuple>
 
 using namespace ht;
 using glm::dvec3;
@@ -225,4 +229,89 @@ TEST(Polygonize, VertexPlacementTakesFewValuesOnSmoothFields) {
     // The tolerance: |f - T| within 1e-3 of f's change along the edge (at most sqrt(3) h long).
     EXPECT_LE(checks.vertex_error_max, 2e-3 * h) << c.name;
   }
+}
+
+// A brick filter naming octants (PolygonizeOptions::brick_filter): no triangle comes from outside
+// the named octants, and deep inside them (2.5 cells from their faces, where the grid points a
+// vertex's first guess reads were sampled too) the triangles are those of the unfiltered run, on
+// random trees with random octant masks.
+TEST(Polygonize, AnOctantFilterMeshesOnlyItsOctants) {
+  test::Rng rng(63);
+  const double h = 0.05;
+  int compared = 0;
+  for (int trial = 0; trial < 12; ++trial) {
+    Builder b(kT);
+    const Tree t = b.build(b.blend({test::random_tree(b, rng, {}), b.segment({-1, 0, 0}, {1, 0, 0}, {0.6})}));
+    PolygonizeOptions o;
+    o.precision = h;
+    o.quality.enabled = false;
+    o.sharp_features = false;
+    o.snap = false;
+    const TriangleMesh whole = polygonize(t.graph_ptr(), t.root(), kT, o);
+    // The mask of a brick: a hash of its corner, so that each brick gets its own.
+    const std::uint64_t salt = rng();
+    std::mutex mutex;
+    std::vector<Aabb> named;  // the octants the filter named, as boxes
+    o.brick_filter = [&](const Aabb& brick) {
+      std::uint64_t k = salt;
+      for (int a = 0; a < 3; ++a) k = (k ^ std::uint64_t(std::llround(brick.lo[a] / h))) * 0x9e3779b97f4a7c15ull;
+      const auto mask = std::uint8_t((k >> 56) | (k >> 48) | (k >> 40));  // 7 octants in 8, on average
+      const std::lock_guard lock(mutex);
+      for (int q = 0; q < 8; ++q)
+        if ((mask >> q) & 1) named.push_back(octants::of(brick, q));
+      return mask;
+    };
+    const TriangleMesh part = polygonize(t.graph_ptr(), t.root(), kT, o);
+    if (named.empty()) continue;
+    // The named octants as cells of their lattice (4 cells a side); a point on a face is in both.
+    const double side = 4.0 * h;
+    const glm::dvec3 origin = named.front().lo;
+    std::set<std::array<std::int64_t, 3>> cells;
+    for (const Aabb& box : named) {
+      const glm::dvec3 c = glm::round((box.lo - origin) / side);
+      cells.insert({std::int64_t(c.x), std::int64_t(c.y), std::int64_t(c.z)});
+    }
+    auto in_named_at = [&](const glm::dvec3& p) {
+      const glm::dvec3 q = (p - origin) / side;
+      for (int k = 0; k < 8; ++k) {
+        std::array<std::int64_t, 3> c{};
+        for (int a = 0; a < 3; ++a) c[std::size_t(a)] = std::int64_t(std::floor(q[a] + (((k >> a) & 1) ? 1e-9 : -1e-9)));
+        if (cells.count(c)) return true;
+      }
+      return false;
+    };
+    // Inset by r: the cube of half side r around p is named (27 points spaced under a cell of
+    // the lattice meet every one it touches).
+    auto in_named = [&](const glm::dvec3& p, double r) {
+      for (int k = 0; k < 27; ++k)
+        if (!in_named_at(p + r * glm::dvec3(k % 3 - 1, (k / 3) % 3 - 1, k / 9 - 1))) return false;
+      return true;
+    };
+    auto deep = [&](const TriangleMesh& m, const glm::uvec3& tri) {
+      return in_named(m.positions[tri[0]], 2.5 * h) && in_named(m.positions[tri[1]], 2.5 * h) &&
+             in_named(m.positions[tri[2]], 2.5 * h);
+    };
+    for (const glm::uvec3& tri : part.triangles)
+      for (int k = 0; k < 3; ++k) ASSERT_TRUE(in_named_at(part.positions[tri[k]])) << "trial " << trial;
+    // Deep triangles by their corners, compared as sorted lists.
+    auto deep_corners = [&](const TriangleMesh& m) {
+      std::vector<std::array<double, 9>> out;
+      for (const glm::uvec3& tri : m.triangles)
+        if (deep(m, tri)) {
+          std::array<glm::dvec3, 3> c{m.positions[tri[0]], m.positions[tri[1]], m.positions[tri[2]]};
+          std::sort(c.begin(), c.end(), [](const glm::dvec3& x, const glm::dvec3& y) {
+            return std::tie(x.x, x.y, x.z) < std::tie(y.x, y.y, y.z);
+          });
+          out.push_back({c[0].x, c[0].y, c[0].z, c[1].x, c[1].y, c[1].z, c[2].x, c[2].y, c[2].z});
+        }
+      std::sort(out.begin(), out.end());
+      return out;
+    };
+    const auto a = deep_corners(whole), p = deep_corners(part);
+    ASSERT_EQ(a.size(), p.size()) << "trial " << trial;
+    for (std::size_t i = 0; i < a.size(); ++i)
+      for (int k = 0; k < 9; ++k) ASSERT_NEAR(a[i][std::size_t(k)], p[i][std::size_t(k)], 1e-9 * h) << "trial " << trial;
+    compared += int(a.size());
+  }
+  EXPECT_GT(compared, 1000);
 }
