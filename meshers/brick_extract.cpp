@@ -250,6 +250,18 @@ std::size_t place_vertices(const Grid& grid, glm::ivec3 b, std::uint32_t brick_i
   return evaluations;
 }
 
+std::uint8_t octants_at(int i, int j, int k) {
+  constexpr int half = kCells / 2;
+  const int c[3] = {i, j, k};
+  std::uint8_t mask = 0;
+  for (int o = 0; o < 8; ++o) {
+    bool in = true;
+    for (int a = 0; a < 3; ++a) in = in && (((o >> a) & 1) ? c[a] >= half : c[a] <= half);
+    if (in) mask = std::uint8_t(mask | (1u << o));
+  }
+  return mask;
+}
+
 std::size_t drop_unsampled(const Grid& grid, glm::ivec3 b, const float* own, std::uint8_t octants, const Scratch& sc,
                            BrickOutput& out) {
   const glm::i64vec3 base = glm::i64vec3(b) * std::int64_t(kCells);

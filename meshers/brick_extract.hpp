@@ -104,6 +104,10 @@ std::size_t place_vertices(const Grid& grid, glm::ivec3 b, std::uint32_t brick_i
                     const std::uint8_t* label, const TapeEvaluator& eval, double T, const Refine& refine,
                     Scratch& scratch, BrickOutput& out);
 
+/// The octants of a brick (bit i + 2 j + 4 k: the upper half of x when i is 1, and so on, as
+/// PolygonizeOptions::brick_filter names them) whose closed boxes hold local grid point (i, j, k).
+std::uint8_t octants_at(int i, int j, int k);
+
 /// Takes out of brick b's output (as march() and place_vertices() left it, with `scratch`) the
 /// triangles of the cells outside the octants `octants` names (PolygonizeOptions::brick_filter)
 /// and those with a vertex on an edge to a point not sampled (NaN in `own`), then the vertices

@@ -216,19 +216,6 @@ void snap_phase(const Grid& grid, const std::vector<EdgeVertex>& all, const Feat
   snap_to_grid_points(mesh, near, normals, snapped, on_bricks, field.threshold(), grid.h, options, &stats.snap);
 }
 
-// The octants of a brick (octants::of) whose closed boxes hold its local grid point (i, j, k).
-std::uint8_t octants_at(int i, int j, int k) {
-  constexpr int half = kCells / 2;
-  std::uint8_t mask = 0;
-  for (int o = 0; o < 8; ++o) {
-    const int c[3] = {i, j, k};
-    bool in = true;
-    for (int a = 0; a < 3; ++a) in = in && (((o >> a) & 1) ? c[a] >= half : c[a] <= half);
-    if (in) mask = std::uint8_t(mask | (1u << o));
-  }
-  return mask;
-}
-
 // Folds left by the crease step or the quality pass: collapsed (meshers/unfold.hpp), and where
 // collapses are stuck, the vertices around them relaxed apart (meshers/relax.hpp untangle, crease
 // points sliding along their crease), in turns. `pairs` holds every intersecting pair and
@@ -488,7 +475,7 @@ TriangleMesh polygonize(std::shared_ptr<const Graph> graph, NodeId root, double 
         for (int i = 0; i < kPoints; ++i, ++n) {
           std::size_t at = 0;
           if (sampled_owner(b, {i, j, k}, at) != owner) continue;
-          if (!(wanted[a] & octants_at(i, j, k))) {
+          if (!(wanted[a] & brick::octants_at(i, j, k))) {
             values[a * kBrickPoints + std::size_t(n)] = skipped;
             continue;
           }
