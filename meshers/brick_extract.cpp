@@ -179,7 +179,7 @@ std::size_t place_vertices(const Grid& grid, glm::ivec3 b, std::uint32_t brick_i
   sc.probed.assign(nv, 0);
   for (auto* v : {&sc.xs, &sc.ys, &sc.zs, &sc.fv}) v->resize(nv);
   // An edge to a point that was not sampled (NaN: outside the octants a filter wanted) keeps
-  // its midpoint: its sign change is not the surface's, and the caller cuts it away.
+  // its midpoint: its sign change is not the surface's, and drop_unsampled takes it away.
   auto& live = sc.live;
   live.clear();
   for (std::uint32_t v = 0; v < nv; ++v)
@@ -266,11 +266,8 @@ std::size_t drop_unsampled(const Grid& grid, glm::ivec3 b, const float* own, std
                            BrickOutput& out) {
   const glm::i64vec3 base = glm::i64vec3(b) * std::int64_t(kCells);
   auto unsampled = [&](std::uint64_t key) {
-    const std::uint64_t lower = key / 8, dir = key % 8;
-    const glm::i64vec3 p(std::int64_t(lower % std::uint64_t(grid.points.x)),
-                         std::int64_t((lower / std::uint64_t(grid.points.x)) % std::uint64_t(grid.points.y)),
-                         std::int64_t(lower / std::uint64_t(grid.points.x * grid.points.y)));
-    const glm::ivec3 a(p - base), d(int(dir & 1), int((dir >> 1) & 1), int((dir >> 2) & 1));
+    const std::uint64_t dir = key % 8;
+    const glm::ivec3 a(grid.point_at(key / 8) - base), d(int(dir & 1), int((dir >> 1) & 1), int((dir >> 2) & 1));
     return std::isnan(own[local_index(a)]) || std::isnan(own[local_index(a + d)]);
   };
   // Triangles by cell (march's order): a cell of an octant left out goes whole, even where its

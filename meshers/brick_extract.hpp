@@ -49,6 +49,10 @@ struct Grid {
   std::uint64_t point_index(glm::i64vec3 p) const {
     return std::uint64_t(p.x + points.x * (p.y + points.y * p.z));
   }
+  glm::i64vec3 point_at(std::uint64_t index) const {  // the inverse of point_index
+    const auto px = std::uint64_t(points.x), py = std::uint64_t(points.y);
+    return {std::int64_t(index % px), std::int64_t((index / px) % py), std::int64_t(index / (px * py))};
+  }
   glm::dvec3 position(glm::i64vec3 p) const { return origin + glm::dvec3(p) * h; }
 };
 

@@ -82,7 +82,7 @@ TriangleMesh blend_patch(const LocalInput& in, const BlendFields& bf, const std:
                          const TapeEvaluator& field, LocalStats& st) {
   const Graph* graph = in.graph.get();
   const auto c = graph->children_of(in.node);
-  const double margin = 1.0 * in.precision, T = in.threshold, eps = bf.eps;
+  const double margin = in.precision, T = in.threshold, eps = bf.eps;
   // The patch's cut keeps where the operands' |f| but the largest add up to eps: so may they in
   // a box where their bounds on |f| (interval analysis) do. Tested on the octants of each brick,
   // one cell wider (the cut's crossing edges lie in octants whose closed boxes the region

@@ -198,9 +198,7 @@ void snap_phase(const Grid& grid, const std::vector<EdgeVertex>& all, const Feat
   std::size_t count = 0;
   for (std::size_t i = 0; i < all.size(); ++i) {
     const std::uint64_t lower = all[i].key / 8, dir = all[i].key % 8;
-    const glm::i64vec3 lp(std::int64_t(lower % std::uint64_t(grid.points.x)),
-                          std::int64_t((lower / std::uint64_t(grid.points.x)) % std::uint64_t(grid.points.y)),
-                          std::int64_t(lower / std::uint64_t(grid.points.x * grid.points.y)));
+    const glm::i64vec3 lp = grid.point_at(lower);
     const glm::i64vec3 d(std::int64_t(dir & 1), std::int64_t((dir >> 1) & 1), std::int64_t((dir >> 2) & 1));
     const glm::dvec3 dd(d);
     const double s = glm::dot(all[i].position - grid.position(lp), dd) / (glm::dot(dd, dd) * grid.h);
