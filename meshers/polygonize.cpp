@@ -321,17 +321,6 @@ void quality_phase(SurfaceField& field, RootField& root_field, double h, const Q
 
 }  // namespace
 
-Aabb octants::of(const Aabb& box, int k) {
-  const glm::dvec3 mid = box.center();
-  Aabb out;
-  for (int a = 0; a < 3; ++a) {
-    const bool upper = (k >> a) & 1;
-    out.lo[a] = upper ? mid[a] : box.lo[a];
-    out.hi[a] = upper ? box.hi[a] : mid[a];
-  }
-  return out;
-}
-
 TriangleMesh polygonize(std::shared_ptr<const Graph> graph, NodeId root, double T, const PolygonizeOptions& options,
                         PolygonizeStats* stats_out) {
   PolygonizeStats stats;
