@@ -106,16 +106,6 @@ TriangleMesh patch(const LocalInput& in, const Aabb& clip, std::function<std::ui
   st.patch_precision = o.precision;
   o.clip = clip;
   o.brick_filter = std::move(wanted);
-  if (!o.sharp_features) {
-    // Octants that interval analysis puts on one side of T hold no crossing edge: not sampled.
-    // Not where creases are split: there a vertex's first guess, which reads the points past
-    // its edge's ends, may tip a bend into a crease (docs/meshing.md).
-    o.brick_filter = [wanted = std::move(o.brick_filter), graph = in.graph, node = in.node, T = in.threshold,
-                      cell = o.precision](const Aabb& brick) -> std::uint8_t {
-      const std::uint8_t mask = wanted(brick);
-      return mask == 0 ? 0 : std::uint8_t(mask & octants::crossing(*graph, node, T, brick, cell));
-    };
-  }
   o.progress = {};
   st.patched = true;
   return polygonize(in.graph, in.node, in.threshold, o, &st.patch);

@@ -80,14 +80,6 @@ namespace octants {
 inline constexpr std::uint8_t kAll = 0xff;
 /// Octant `k`'s box in `box` (k as the bits above).
 Aabb of(const Aabb& box, int k);
-/// The octants of `brick` where `node`'s surface may pass: those whose boxes, `margin` wider,
-/// interval analysis (runtime/tape.hpp field_interval, as the polygonizer classifies bricks)
-/// does not place wholly on one side of `threshold`. With a margin of at least one cell, an
-/// octant left out holds no crossing edge and its cells no triangle, so a brick_filter that also
-/// leaves it out changes no triangle; only vertex positions move, within the refinement's
-/// tolerance (a vertex's first guess reads the points past its edge's ends, which are then not
-/// sampled). Thread-safe.
-std::uint8_t crossing(const Graph& graph, NodeId node, double threshold, const Aabb& brick, double margin);
 }  // namespace octants
 
 struct PolygonizeStats {
