@@ -89,11 +89,11 @@ TriangleMesh blend_patch(const LocalInput& in, const BlendFields& bf, const std:
   // a box where their bounds on |f| (interval analysis) do. Tested on the octants of each brick,
   // one of the patch's cells wider (the cut's crossing edges lie in octants whose closed boxes
   // the region reaches; the margin is for rounding): on whole bricks two cells wider, 42 to 88%
-  // of the patch's triangles on the examples lay where the cut then took them away. An octant whose
-  // blend field (the sum of the operands', so its range is the sum of their ranges) lies on one
-  // side of T holds no crossing edge, and is left out too: no triangle changes, a vertex beside
-  // it may move within the refinement's tolerance (its first guess reads the points past its
-  // edge's ends; tests/test_polygonize.cpp LeavingOutOneSidedOctantsChangesNoTriangle).
+  // of the patch's triangles on the examples lay where the cut then took them away. An octant
+  // whose blend field (the sum of the operands', so its range is the sum of their ranges) lies on
+  // one side of T holds no crossing edge, and is left out too: no triangle changes, a vertex
+  // beside it may move within the refinement's tolerance (its first guess reads the points past
+  // its edge's ends; tests/test_polygonize.cpp LeavingOutOneSidedOctantsChangesNoTriangle).
   auto two_act = [graph, c, eps, T](const Aabb& box) {
     double sum = 0.0, largest = 0.0;
     Interval blend;
