@@ -10,9 +10,15 @@
 #include "runtime/interval.hpp"
 #include "runtime/tape.hpp"
 
+#include <glm/common.hpp>
+#include <glm/vector_relational.hpp>
+#include <tbb/parallel_for.h>
+
 #include <algorithm>
 #include <cmath>
+#include <mutex>
 #include <string>
+#include <tuple>
 #include <vector>
 
 namespace ht {
@@ -78,6 +84,53 @@ class BlendFields {
   std::vector<NodeField> fields;
 };
 
+// The patch's octants where the operands but the largest add up to at least 2 eps on the whole
+// box one cell wider: the patch's cut keeps every vertex there and no edge from one crosses it
+// (an edge stays within that box), so their cut values need not be computed; any negative value
+// reads the same (meshers/cut.hpp reads values at the ends of crossing edges only).
+class DeepOctants {
+ public:
+  void add(const Aabb& octant) {
+    const std::lock_guard lock(mutex_);
+    boxes_.push_back(octant);
+  }
+  /// The cut's values at the patch's vertices: -eps strictly inside a deep octant, else `cut`'s.
+  std::vector<double> cut_values(const TriangleMesh& patch, const BatchField& cut, double eps) const {
+    const std::size_t n = patch.positions.size();
+    std::vector<std::uint8_t> deep(n, 0);
+    if (!boxes_.empty()) {
+      // The octants lie on one lattice: their corners' offsets from the lowest corner, in sides.
+      const double side = boxes_.front().size().x;
+      glm::dvec3 origin = boxes_.front().lo;
+      for (const Aabb& b : boxes_) origin = glm::min(origin, b.lo);
+      std::vector<glm::i64vec3> keys;
+      for (const Aabb& b : boxes_) keys.push_back(glm::i64vec3(glm::round((b.lo - origin) / side)));
+      const auto less = [](const glm::i64vec3& a, const glm::i64vec3& b) {
+        return std::tie(a.x, a.y, a.z) < std::tie(b.x, b.y, b.z);
+      };
+      std::sort(keys.begin(), keys.end(), less);
+      tbb::parallel_for(std::size_t(0), n, [&](std::size_t v) {
+        const glm::dvec3 q = (patch.positions[v] - origin) / side, at = glm::floor(q), f = q - at;
+        // On an octant's face (or within rounding of it) the vertex may belong to its neighbour.
+        if (glm::any(glm::lessThan(f, glm::dvec3(1e-6))) || glm::any(glm::greaterThan(f, glm::dvec3(1.0 - 1e-6)))) return;
+        deep[v] = std::binary_search(keys.begin(), keys.end(), glm::i64vec3(at), less);
+      });
+    }
+    std::vector<glm::dvec3> asked;
+    for (std::size_t v = 0; v < n; ++v)
+      if (!deep[v]) asked.push_back(patch.positions[v]);
+    std::vector<double> answers(asked.size()), values(n, -eps);
+    cut(asked, answers);
+    for (std::size_t v = 0, i = 0; v < n; ++v)
+      if (!deep[v]) values[v] = answers[i++];
+    return values;
+  }
+
+ private:
+  std::mutex mutex_;
+  std::vector<Aabb> boxes_;  // in no particular order (filled in parallel); read sorted
+};
+
 // The blend's own surface where two operands act, cut to where every g_i >= eps, pulled back
 // one ring and its loops straightened: the far side of the bands.
 TriangleMesh blend_patch(const LocalInput& in, const BlendFields& bf, const std::vector<Aabb>& meets, const Aabb& clip,
@@ -94,23 +147,40 @@ TriangleMesh blend_patch(const LocalInput& in, const BlendFields& bf, const std:
   // one side of T holds no crossing edge, and is left out too: no triangle changes, a vertex
   // beside it may move within the refinement's tolerance (its first guess reads the points past
   // its edge's ends; tests/test_polygonize.cpp LeavingOutOneSidedOctantsChangesNoTriangle).
-  auto two_act = [graph, c, eps, T](const Aabb& box) {
-    double sum = 0.0, largest = 0.0;
+  // Whether an octant's box (widened) is kept, and whether it is deep (DeepOctants). A lower
+  // bound of what all but the largest |f| add up to: the bounds' sum less the largest bound.
+  auto test = [graph, c, eps, T](const Aabb& box, bool& deep) {
+    double sum = 0.0, largest = 0.0, least_sum = 0.0, least_largest = 0.0;
     Interval blend;
     for (NodeId child : c) {
       const Interval iv = field_interval(*graph, child, T, box, true);
-      const double bound = std::max(iv.hi, -iv.lo);
+      const double bound = std::max(iv.hi, -iv.lo), least = iv.lo > 0 ? iv.lo : iv.hi < 0 ? -iv.hi : 0.0;
       sum += bound;
       largest = std::max(largest, bound);
+      least_sum += least;
+      least_largest = std::max(least_largest, least);
       blend = interval::add(blend, iv);
     }
+    deep = least_sum - least_largest >= 2.0 * eps;
     return sum - largest >= eps && blend.lo < T && blend.hi >= T;
   };
-  const TriangleMesh p = patch(in, clip, [meets, two_act](const Aabb& brick) -> std::uint8_t {
+  DeepOctants deep_octants;
+  const TriangleMesh p = patch(in, clip, [meets, test, &deep_octants](const Aabb& brick) -> std::uint8_t {
     if (std::none_of(meets.begin(), meets.end(), [&](const Aabb& m) { return overlaps(m, brick); })) return 0;
-    return octants_where(brick, brick.size().x / brick::kCells, two_act);  // one of the patch's cells
+    const double cell = brick.size().x / brick::kCells;  // one of the patch's cells
+    bool deep = false;
+    if (!test(brick.expanded(cell), deep)) return 0;
+    std::uint8_t mask = 0;
+    for (int k = 0; k < 8; ++k) {
+      const Aabb octant = octants::of(brick, k);
+      if (!test(octant.expanded(cell), deep)) continue;
+      mask = std::uint8_t(mask | (1u << k));
+      if (deep) deep_octants.add(octant);
+    }
+    return mask;
   }, st, false);  // a blend is smooth where operands meet
-  TriangleMesh side = pull_back_boundary(cut_mesh(p, bf.cut(c.size()), cut_options(in)));
+  const BatchField cut = bf.cut(c.size());
+  TriangleMesh side = pull_back_boundary(cut_mesh(p, deep_octants.cut_values(p, cut, eps), cut, cut_options(in)));
   relax_boundary(side, field, T);
   st.patch_triangles = side.triangles.size();
   return side;
