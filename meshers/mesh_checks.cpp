@@ -50,14 +50,16 @@ std::pair<double, double> min_and_p1(std::vector<float>& angles) {
 }
 
 
-// Counts edges by use and direction, and joins the triangles across each edge into components.
-void edge_census(const std::vector<Side>& he, UnionFind& tris, MeshChecks& c) {
+// Counts edges by use and direction, and with `tris` joins the triangles across each edge into
+// components.
+void edge_census(const std::vector<Side>& he, UnionFind* tris, MeshChecks& c) {
   for_each_edge(he, [&](std::span<const Side> run) {
     ++c.edges;
     if (run.size() == 1) ++c.boundary_edges;
     if (run.size() > 2) ++c.nonmanifold_edges;
     if (run.size() == 2 && run[0].forward == run[1].forward) ++c.misoriented_edges;
-    for (const Side& s : run.subspan(1)) tris.unite(run[0].tri, s.tri);
+    if (tris)
+      for (const Side& s : run.subspan(1)) tris->unite(run[0].tri, s.tri);
   });
 }
 
@@ -70,30 +72,33 @@ void fan_census(const std::vector<glm::uvec3>& T, const std::vector<std::uint32_
       tbb::blocked_range<std::uint32_t>(0, std::uint32_t(start.size() - 1)), Counts{0, 0},
       [&](const tbb::blocked_range<std::uint32_t>& r, Counts acc) {
         std::vector<std::uint32_t> group;
+        std::vector<std::array<std::uint32_t, 2>> corners;  // (corner, triangle in the fan)
         for (std::uint32_t v = r.begin(); v < r.end(); ++v) {
           const std::uint32_t b = start[v], e = start[v + 1];
           if (b == e) {
             ++acc[0];
             continue;
           }
-          // Small fans: a quadratic link is cheaper than any structure.
-          group.assign(e - b, 0);
+          // Triangles at v sharing another corner w share the edge vw: each triangle's corners
+          // other than v, sorted (a fan is small: insertion sort), join the triangles that
+          // name the same corner.
+          const std::uint32_t k = e - b;
+          group.resize(k);
           std::iota(group.begin(), group.end(), 0u);
           auto root = [&](std::uint32_t x) {
             while (group[x] != x) x = group[x];
             return x;
           };
-          for (std::uint32_t i = b; i < e; ++i)
-            for (std::uint32_t j = i + 1; j < e; ++j) {
-              const auto& ti = T[incident[i]];
-              const auto& tj = T[incident[j]];
-              int shared = 0;  // vertices shared besides v: an edge at v when there is one
-              for (int x = 0; x < 3; ++x)
-                for (int y = 0; y < 3; ++y) shared += (ti[x] == tj[y] && ti[x] != v) ? 1 : 0;
-              if (shared > 0) group[root(i - b)] = root(j - b);
-            }
+          corners.clear();
+          for (std::uint32_t i = 0; i < k; ++i)
+            for (int x = 0; x < 3; ++x)
+              if (const std::uint32_t w = T[incident[b + i]][x]; w != v) corners.push_back({w, i});
+          for (std::size_t i = 1; i < corners.size(); ++i)
+            for (std::size_t j = i; j > 0 && corners[j - 1][0] > corners[j][0]; --j) std::swap(corners[j - 1], corners[j]);
+          for (std::size_t i = 1; i < corners.size(); ++i)
+            if (corners[i][0] == corners[i - 1][0]) group[root(corners[i][1])] = root(corners[i - 1][1]);
           std::size_t roots = 0;
-          for (std::uint32_t i = 0; i < e - b; ++i) roots += root(i) == i ? 1 : 0;
+          for (std::uint32_t i = 0; i < k; ++i) roots += root(i) == i ? 1 : 0;
           if (roots > 1) ++acc[1];
         }
         return acc;
@@ -131,9 +136,9 @@ void component_census(const std::vector<glm::uvec3>& T, const std::vector<Side>&
   }
 }
 
-// Area, volume, degenerate triangles and angles: each triangle's figures in parallel, summed in
-// triangle order (the same bits at any thread count).
-void geometry_census(const TriangleMesh& mesh, MeshChecks& c) {
+// Degenerate triangles and, when `full`, area, volume and angles: each triangle's figures in
+// parallel, summed in triangle order (the same bits at any thread count).
+void geometry_census(const TriangleMesh& mesh, bool full, MeshChecks& c) {
   const auto& P = mesh.positions;
   const auto& T = mesh.triangles;
   glm::dvec3 lo(0.0), hi(0.0);
@@ -143,13 +148,20 @@ void geometry_census(const TriangleMesh& mesh, MeshChecks& c) {
     hi = glm::max(hi, p);
   }
   const double scale = std::max(glm::length(hi - lo), 1e-300);
-  std::vector<double> area2(T.size()), volume6(T.size());
+  std::vector<double> area2(T.size());
+  tbb::parallel_for(std::size_t(0), T.size(), [&](std::size_t i) {
+    const glm::uvec3& t = T[i];
+    area2[i] = glm::length(glm::cross(P[t[1]] - P[t[0]], P[t[2]] - P[t[0]]));
+  });
+  for (std::size_t i = 0; i < T.size(); ++i)
+    if (area2[i] <= 1e-14 * scale * scale) ++c.degenerate_triangles;
+  if (!full) return;
+  std::vector<double> volume6(T.size());
   std::vector<float> smallest(T.size());  // each triangle's smallest angle, for the percentile
   std::vector<double> amin(T.size());
   tbb::parallel_for(std::size_t(0), T.size(), [&](std::size_t i) {
     const glm::uvec3& t = T[i];
     const glm::dvec3 a = P[t[0]], b = P[t[1]], d = P[t[2]];
-    area2[i] = glm::length(glm::cross(b - a, d - a));
     volume6[i] = glm::dot(a, glm::cross(b, d));
     amin[i] = smallest_angle(a, b, d);
     smallest[i] = float(amin[i]);
@@ -158,7 +170,6 @@ void geometry_census(const TriangleMesh& mesh, MeshChecks& c) {
   for (std::size_t i = 0; i < T.size(); ++i) {
     c.area += 0.5 * area2[i];
     c.volume += volume6[i] / 6.0;
-    if (area2[i] <= 1e-14 * scale * scale) ++c.degenerate_triangles;
     c.min_angle = std::min(c.min_angle, amin[i]);
     ++c.min_angle_histogram[std::min<std::size_t>(5, static_cast<std::size_t>(amin[i] / 10.0))];
   }
@@ -167,15 +178,19 @@ void geometry_census(const TriangleMesh& mesh, MeshChecks& c) {
 
 }  // namespace
 
-MeshChecks check_mesh(const TriangleMesh& mesh, bool self_intersections) {
+namespace {
+
+// The figures of check_mesh() but the intersections; with `full` false only those
+// check_watertight() fills.
+MeshChecks census(const TriangleMesh& mesh, bool full) {
   MeshChecks c;
   const auto& P = mesh.positions;
   const auto& T = mesh.triangles;
   c.vertices = P.size();
   c.triangles = T.size();
   const std::vector<Side> he = sides_by_edge(P.size(), T);
-  UnionFind tris(T.size());
-  edge_census(he, tris, c);
+  UnionFind tris(full ? T.size() : 0);
+  edge_census(he, full ? &tris : nullptr, c);
   // Each vertex's triangles.
   std::vector<std::uint32_t> start(P.size() + 1, 0);
   for (const auto& t : T)
@@ -185,11 +200,20 @@ MeshChecks check_mesh(const TriangleMesh& mesh, bool self_intersections) {
   for (std::uint32_t t = 0; t < T.size(); ++t)
     for (int k = 0; k < 3; ++k) incident[fill[T[t][k]]++] = t;
   fan_census(T, start, incident, c);
-  component_census(T, he, tris, start, incident, c);
-  geometry_census(mesh, c);
-  if (!T.empty() && self_intersections) c.self_intersecting_pairs = find_self_intersections(mesh, 0).pairs;
+  if (full) component_census(T, he, tris, start, incident, c);
+  geometry_census(mesh, full, c);
   return c;
 }
+
+}  // namespace
+
+MeshChecks check_mesh(const TriangleMesh& mesh, bool self_intersections) {
+  MeshChecks c = census(mesh, true);
+  if (!mesh.triangles.empty() && self_intersections) c.self_intersecting_pairs = find_self_intersections(mesh, 0).pairs;
+  return c;
+}
+
+MeshChecks check_watertight(const TriangleMesh& mesh) { return census(mesh, false); }
 
 namespace {
 

@@ -184,7 +184,7 @@ std::string local_defect(const TriangleMesh& m, const LocalStats& local) {
   // Operands lying on each other's surfaces (a subtree used twice in a union) cut each other
   // away entirely; the global polygonizer tells a truly empty result from that.
   if (m.triangles.empty() && local.operand_triangles > 0) return "no triangles from non-empty operands";
-  MeshChecks c = check_mesh(m, false);
+  MeshChecks c = check_watertight(m);
   c.self_intersecting_pairs = local.self_intersections;
   std::string why;
   auto add = [&](std::size_t n, const char* what) {

@@ -86,19 +86,34 @@ TEST(MeshChecks, CountsEveryDefectExactlyWhateverTheNumbering) {
       {"two apart", both(tetrahedron(), tetrahedron({3, 0, 0})), 12, 0, 0, 0, 0, 0, 2, 0},
       {"two touching at a vertex", both(tetrahedron(), tetrahedron({-1, -1, -1}), true), 12, 0, 0, 0, 1, 0, 2, 0},
   };
+  // What check_watertight(), the lean check the mesh plan runs on every result, counts too.
+  auto expect_defects = [](const MeshChecks& c, const Case& k) {
+    EXPECT_EQ(c.edges, k.edges) << k.what;
+    EXPECT_EQ(c.boundary_edges, k.boundary) << k.what;
+    EXPECT_EQ(c.nonmanifold_edges, k.nonmanifold_edges) << k.what;
+    EXPECT_EQ(c.misoriented_edges, k.misoriented) << k.what;
+    EXPECT_EQ(c.nonmanifold_vertices, k.nonmanifold_vertices) << k.what;
+    EXPECT_EQ(c.unused_vertices, k.unused) << k.what;
+    EXPECT_EQ(c.degenerate_triangles, 0u) << k.what;
+  };
   test::Rng rng = test::seeded();
   for (const Case& k : cases)
     for (int trial = 0; trial < 8; ++trial) {
-      const MeshChecks c = check_mesh(trial == 0 ? k.mesh : shuffled(k.mesh, rng), false);
-      EXPECT_EQ(c.edges, k.edges) << k.what;
-      EXPECT_EQ(c.boundary_edges, k.boundary) << k.what;
-      EXPECT_EQ(c.nonmanifold_edges, k.nonmanifold_edges) << k.what;
-      EXPECT_EQ(c.misoriented_edges, k.misoriented) << k.what;
-      EXPECT_EQ(c.nonmanifold_vertices, k.nonmanifold_vertices) << k.what;
-      EXPECT_EQ(c.unused_vertices, k.unused) << k.what;
+      const TriangleMesh m = trial == 0 ? k.mesh : shuffled(k.mesh, rng);
+      const MeshChecks c = check_mesh(m, false);
+      expect_defects(c, k);
       EXPECT_EQ(c.components, k.components) << k.what;
       EXPECT_EQ(c.genus, k.genus) << k.what;
+      expect_defects(check_watertight(m), k);
     }
+  // A corner moved onto the middle of the opposite edge: one face of zero area.
+  TriangleMesh flat = tetrahedron();
+  flat.positions[3] = 0.5 * (flat.positions[0] + flat.positions[1]);
+  for (const TriangleMesh& m : {flat, shuffled(flat, rng)}) {
+    EXPECT_EQ(check_mesh(m, false).degenerate_triangles, 1u);
+    EXPECT_EQ(check_watertight(m).degenerate_triangles, 1u);
+    EXPECT_TRUE(check_watertight(m).closed());
+  }
   const MeshChecks c = check_mesh(shuffled(tetrahedron(), rng), false);
   EXPECT_NEAR(c.volume, 1.0 / 6.0, 1e-15);
   EXPECT_NEAR(c.area, 1.5 + std::sqrt(3.0) / 2.0, 1e-15);
