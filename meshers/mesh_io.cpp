@@ -42,6 +42,7 @@ void write_mesh(const TriangleMesh& mesh, const std::filesystem::path& file) {
     throw MeshWriteError(file.string() + ": unsupported extension (use .ply, .obj, .off or .stl)");
   const std::filesystem::path dir = file.parent_path().empty() ? std::filesystem::path(".") : file.parent_path();
   if (!std::filesystem::is_directory(dir)) throw MeshWriteError(file.string() + ": folder " + dir.string() + " does not exist");
+  if (std::filesystem::is_directory(file)) throw MeshWriteError(file.string() + ": is a folder, not a file");
   TriMeshHolder holder;
   to_openmesh(mesh, holder);
   if (holder.mesh.n_faces() != mesh.triangles.size())
@@ -65,8 +66,9 @@ void write_mesh(const TriangleMesh& mesh, const std::filesystem::path& file) {
   }
   std::filesystem::rename(tmp, file, ec);
   if (ec) {
+    const std::string why = ec.message();  // before remove() reuses ec
     std::filesystem::remove(tmp, ec);
-    throw MeshWriteError(file.string() + ": cannot move the finished file into place: " + ec.message());
+    throw MeshWriteError(file.string() + ": cannot move the finished file into place: " + why);
   }
 }
 

@@ -392,8 +392,8 @@ std::shared_ptr<const TriangleMesh> Runner::execute(const Job& job, NodeReport& 
       // Held while it is built: the mesh's arrays (about 24 bytes a triangle) and their growth.
       const double triangles = sweep_triangle_estimate(*g, n, T, h);
       const MemoryReservation building(budget_, 48.0 * triangles,
-                                       "the sweep mesh of node " + g->label(n) + " (about " +
-                                           std::to_string(std::llround(triangles)) + " triangles)");
+                                       "the sweep mesh of node " + g->label(n) + " (" + format_estimate(triangles) +
+                                           " triangles)");
       auto mesh = std::make_shared<const TriangleMesh>(sweep_mesh(*g, n, T, h));
       const std::size_t pairs = find_self_intersections(*mesh, 0).pairs;
       if (pairs == 0) return mesh;

@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdio>
 
 namespace ht {
 
@@ -16,6 +17,19 @@ double default_precision(const Tree& tree, double requested) {
   if (tree.mesher_settings().precision > 0) return tree.mesher_settings().precision;
   const Aabb solid = solid_bounds(tree.graph(), tree.root(), tree.threshold());
   return solid.finite() ? std::max(glm::length(solid.size()) / 100.0, 1e-9) : 1.0;
+}
+
+void check_precision(const Tree& tree, double precision) {
+  const Aabb solid = solid_bounds(tree.graph(), tree.root(), tree.threshold());
+  if (solid.empty() || !solid.finite()) return;
+  const double across = glm::length(solid.size());
+  if (precision <= across) return;
+  char buf[256];
+  std::snprintf(buf, sizeof buf,
+                "precision %g is coarser than the whole scene (its solid lies in a box %g across): no part of the "
+                "surface can be resolved; use at most %g (the scene's default: %g)",
+                precision, across, across, default_precision(tree, 0.0));
+  throw PolygonizeError(buf);
 }
 
 namespace {
@@ -162,6 +176,7 @@ MeshRun run_mesh(const Tree& tree, const MeshRunOptions& o) {
   MeshRun run;
   MeshOptions& options = run.options;
   options.precision = default_precision(tree, o.precision);
+  check_precision(tree, options.precision);
   options.polygonize.memory_budget = static_cast<std::size_t>(o.memory_gib * double(1u << 30));
   options.polygonize.sharp_features = o.sharp_features;
   options.polygonize.quality.enabled = o.quality;

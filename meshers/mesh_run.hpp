@@ -21,6 +21,11 @@ namespace ht {
 /// 1/100 of its solid's size (1 for an unbounded or empty solid).
 double default_precision(const Tree& tree, double requested);
 
+/// Throws PolygonizeError (saying what to use instead) when `precision` is coarser than the box
+/// the scene's solid lies in is across: no part of the surface could be resolved, and the mesh
+/// would come out empty or meaningless. run_mesh() checks it.
+void check_precision(const Tree& tree, double precision);
+
 struct MeshRunOptions {
   double precision = 0.0;   ///< edge length, world units; 0: default_precision()
   std::string strategy;     ///< "auto", "global" or "local"; empty: the scene's mesher.strategy

@@ -1,5 +1,6 @@
 #include "runtime/memory_budget.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <limits>
@@ -8,6 +9,7 @@ namespace ht {
 
 std::string format_bytes(double bytes) {
   char buf[64];
+  if (!(bytes < 1e24)) return "more than 10^15 GiB";  // NaN too
   if (bytes >= double(1u << 30))
     std::snprintf(buf, sizeof buf, "%.2f GiB", bytes / double(1u << 30));
   else if (bytes >= double(1u << 20))
@@ -15,6 +17,11 @@ std::string format_bytes(double bytes) {
   else
     std::snprintf(buf, sizeof buf, "%.0f bytes", bytes);
   return buf;
+}
+
+std::string format_estimate(double count) {
+  if (!(count < 1e15)) return "more than 10^15";
+  return "about " + std::to_string(std::llround(std::max(count, 0.0)));
 }
 
 MemoryBudgetError::MemoryBudgetError(const std::string& what, std::size_t needed_bytes, std::size_t in_use_bytes,

@@ -24,6 +24,9 @@ struct MemoryBudgetError : std::runtime_error {
 
 /// "1.25 GiB", "3.0 MiB", "512 bytes": for messages.
 std::string format_bytes(double bytes);
+/// "about N" for an estimated count, or "more than 10^15" past that (and for NaN): an absurd
+/// precision makes estimates no integer type holds.
+std::string format_estimate(double count);
 
 class MemoryBudget {
  public:

@@ -128,6 +128,10 @@ TEST(Api, ErrorsCarryTheFileAndThePath) {
   hybridtree::MeshOptions negative;
   negative.precision = -1;
   caught<hybridtree::InputError>([&] { tree.mesh(negative); });
+  hybridtree::MeshOptions coarse;  // coarser than the whole garden: nothing could be resolved
+  coarse.precision = 1e6;
+  const auto too_coarse = caught<hybridtree::MeshingError>([&] { tree.mesh(coarse); });
+  EXPECT_NE(std::string(too_coarse.what()).find("coarser than the whole scene"), std::string::npos) << too_coarse.what();
   hybridtree::MeshOptions tight;
   tight.precision = 0.002;
   tight.memory_budget_gib = 1e-3;

@@ -168,10 +168,29 @@ TEST(Cli, MeshRefusesCleanlyAndLeavesNoFile) {
   const auto folder = test::run_cli("mesh " + s + " -o " + (dir / "no" / "m.ply").string() + " --precision 0.1");
   EXPECT_EQ(folder.code, 1);
   EXPECT_NE(folder.err.find("does not exist"), std::string::npos) << folder.err;
-  // Nothing but the scene is left in the folder: no partial output.
+  // Precisions that are no number, or coarser than the whole scene.
+  for (const char* p : {"nan", "inf", "-0.1"}) {
+    const auto bad = test::run_cli("mesh " + s + " -o " + (dir / "m.ply").string() + " --precision " + p);
+    EXPECT_EQ(bad.code, 2) << p;
+    EXPECT_NE(bad.err.find("must be a finite number > 0, not " + std::string(p)), std::string::npos) << bad.err;
+  }
+  const auto coarse = test::run_cli("mesh " + s + " -o " + (dir / "m.ply").string() + " --precision 1e9");
+  EXPECT_EQ(coarse.code, 2);
+  EXPECT_NE(coarse.err.find("coarser than the whole scene"), std::string::npos) << coarse.err;
+  // An estimate no integer holds is said as such, not as an overflowed count.
+  const auto huge = test::run_cli("mesh " + write_scene(dir, "h.json", R"({"hybridtree": 1, "root": {"type": "point",
+      "center": [0,0,0], "radius": 1e300}})") + " -o " + (dir / "m.ply").string());
+  EXPECT_EQ(huge.code, 2);
+  EXPECT_NE(huge.err.find("more than 10^15 triangles"), std::string::npos) << huge.err;
+  EXPECT_EQ(huge.err.find("-9223372036854775808"), std::string::npos) << huge.err;
+  // Nothing but the scenes is left in the folder: no partial output.
   std::size_t files = 0;
   for ([[maybe_unused]] const auto& e : std::filesystem::directory_iterator(dir)) ++files;
-  EXPECT_EQ(files, 1u);
+  EXPECT_EQ(files, 2u);
+  std::filesystem::create_directory(dir / "d.ply");
+  const auto onto = test::run_cli("mesh " + s + " -o " + (dir / "d.ply").string() + " --precision 0.1");
+  EXPECT_EQ(onto.code, 1);
+  EXPECT_NE(onto.err.find("d.ply: is a folder, not a file"), std::string::npos) << onto.err;
   const auto empty = test::run_cli("mesh " + write_scene(dir, "e.json", R"({"hybridtree": 1, "root": {"type": "point",
       "center": [0,0,0], "radius": 1, "strength": 0.3}})") + " -o " + (dir / "e.ply").string());
   EXPECT_EQ(empty.code, 0) << empty.err;
@@ -505,5 +524,10 @@ TEST(Cli, RenderDrawsScenesAndMeshesIntoPngs) {
   EXPECT_NE(size.err.find("16 to 8192"), std::string::npos) << size.err;
   EXPECT_FALSE(std::filesystem::exists(dir / "x.jpg"));
   EXPECT_FALSE(std::filesystem::exists(dir / "y.png"));
+  std::filesystem::create_directory(dir / "d.png");
+  const auto onto = test::run_cli("render " + test::cgal_mesh("eight.off").string() + " -o " + (dir / "d.png").string() +
+                                  " --size 32 32");
+  EXPECT_NE(onto.code, 0);
+  EXPECT_NE(onto.err.find("d.png: is a folder, not a file"), std::string::npos) << onto.err;
   std::filesystem::remove_all(dir);
 }

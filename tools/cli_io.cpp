@@ -9,6 +9,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstdlib>
+#include <filesystem>
 #include <fstream>
 #include <iostream>
 #include <sstream>
@@ -70,6 +71,7 @@ std::string format_rows(std::span<const double> table, std::size_t columns) {
 }
 
 void write_file_atomically(const std::string& file, std::string_view bytes, const std::string& what) {
+  if (std::filesystem::is_directory(file)) throw InputError(file + ": is a folder, not a file");
   // The process id keeps two runs writing the same file from sharing a temporary.
   const std::string tmp = file + ".partial-" + std::to_string(::getpid());
   std::ofstream out(tmp, std::ios::binary);

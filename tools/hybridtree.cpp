@@ -33,6 +33,7 @@
 #include <atomic>
 #include <csignal>
 #include <chrono>
+#include <cmath>
 #include <cstdio>
 #include <functional>
 #include <map>
@@ -41,6 +42,16 @@
 #include <vector>
 
 namespace {
+
+// CLI11's PositiveNumber lets "nan" and "inf" through (neither is <= 0).
+const CLI::Validator kPositiveFinite(
+    [](std::string& text) -> std::string {
+      double v = 0.0;
+      if (!CLI::detail::lexical_cast(text, v) || !std::isfinite(v) || !(v > 0.0))
+        return "must be a finite number > 0, not " + text;
+      return {};
+    },
+    "POSITIVE");
 
 using ht::cli::InputError;
 
@@ -344,7 +355,7 @@ int main(int argc, char** argv) {
   mesh_cmd->add_option("scene", mesh_args.scene, "Scene file (JSON, SCENE_FORMAT v1)")->required();
   mesh_cmd->add_option("-o,--output", mesh_args.out, "Output mesh: .ply, .obj, .off or .stl")->required();
   mesh_cmd->add_option("--precision", mesh_args.precision, "Target edge length (default: the scene's, else 1/100 of its size)")
-      ->check(CLI::PositiveNumber);
+      ->check(kPositiveFinite);
   mesh_cmd->add_option("--strategy", mesh_args.strategy,
                        "auto (per node: sweep, shared leaf, warped child, global for operators), global or local "
                        "(default: the scene's mesher.strategy)")
@@ -353,7 +364,7 @@ int main(int argc, char** argv) {
   bool mesh_no_optimize = false;
   mesh_cmd->add_flag("--no-optimize", mesh_no_optimize, "Mesh the tree as written, not the optimized one");
   mesh_cmd->add_option("--stats-json", mesh_args.stats_json, "Write triangles, checks and seconds per stage to FILE");
-  mesh_cmd->add_option("--memory-budget", mesh_args.memory_gib, "GiB the mesher may use (default 4)")->check(CLI::PositiveNumber);
+  mesh_cmd->add_option("--memory-budget", mesh_args.memory_gib, "GiB the mesher may use (default 4)")->check(kPositiveFinite);
   mesh_cmd->add_option("--sharp-features", mesh_args.sharp,
                        "on: split edges along creases of min/max Booleans, crops and mesh leaves (default); off: plain "
                        "marching tetrahedra")
@@ -379,7 +390,7 @@ int main(int argc, char** argv) {
   add_pair(render, "--view", render_args.azimuth, render_args.elevation,
            "Azimuth around +y and elevation, degrees (default 35 25)", "AZ EL");
   render->add_option("--precision", render_args.precision, "Meshing precision for a scene (default: the scene's)")
-      ->check(CLI::PositiveNumber);
+      ->check(kPositiveFinite);
 
   int count = 250;
   std::uint64_t seed = 1;
