@@ -13,7 +13,6 @@
 #include <glm/geometric.hpp>
 #include <tbb/blocked_range.h>
 #include <tbb/parallel_for.h>
-#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
 #include <array>
@@ -64,48 +63,31 @@ void edge_census(const std::vector<Side>& he, UnionFind* tris, MeshChecks& c) {
 }
 
 // Vertex fans: the triangles around a vertex, linked through the edges at the vertex, must form
-// one group. `start`/`incident` list each vertex's triangles.
-void fan_census(const std::vector<glm::uvec3>& T, const std::vector<std::uint32_t>& start,
-                const std::vector<std::uint32_t>& incident, MeshChecks& c) {
-  using Counts = std::array<std::size_t, 2>;  // unused, non-manifold
-  const Counts n = tbb::parallel_reduce(
-      tbb::blocked_range<std::uint32_t>(0, std::uint32_t(start.size() - 1)), Counts{0, 0},
-      [&](const tbb::blocked_range<std::uint32_t>& r, Counts acc) {
-        std::vector<std::uint32_t> group;
-        std::vector<std::array<std::uint32_t, 2>> corners;  // (corner, triangle in the fan)
-        for (std::uint32_t v = r.begin(); v < r.end(); ++v) {
-          const std::uint32_t b = start[v], e = start[v + 1];
-          if (b == e) {
-            ++acc[0];
-            continue;
-          }
-          // Triangles at v sharing another corner w share the edge vw: each triangle's corners
-          // other than v, sorted (a fan is small: insertion sort), join the triangles that
-          // name the same corner.
-          const std::uint32_t k = e - b;
-          group.resize(k);
-          std::iota(group.begin(), group.end(), 0u);
-          auto root = [&](std::uint32_t x) {
-            while (group[x] != x) x = group[x];
-            return x;
-          };
-          corners.clear();
-          for (std::uint32_t i = 0; i < k; ++i)
-            for (int x = 0; x < 3; ++x)
-              if (const std::uint32_t w = T[incident[b + i]][x]; w != v) corners.push_back({w, i});
-          for (std::size_t i = 1; i < corners.size(); ++i)
-            for (std::size_t j = i; j > 0 && corners[j - 1][0] > corners[j][0]; --j) std::swap(corners[j - 1], corners[j]);
-          for (std::size_t i = 1; i < corners.size(); ++i)
-            if (corners[i][0] == corners[i - 1][0]) group[root(corners[i][1])] = root(corners[i - 1][1]);
-          std::size_t roots = 0;
-          for (std::uint32_t i = 0; i < k; ++i) roots += root(i) == i ? 1 : 0;
-          if (roots > 1) ++acc[1];
-        }
-        return acc;
-      },
-      [](Counts a, const Counts& b) { return Counts{a[0] + b[0], a[1] + b[1]}; });
-  c.unused_vertices = n[0];
-  c.nonmanifold_vertices = n[1];
+// one group. Each triangle's corner stands for the triangle at that vertex; the sides of an edge
+// join their corners at each end, so each group of corners left is one fan.
+void fan_census(const std::vector<glm::uvec3>& T, const std::vector<Side>& he, std::size_t vertices, MeshChecks& c) {
+  UnionFind corners(3 * T.size());
+  // The corner of a side's triangle at its lower (or upper) vertex.
+  auto at = [](const Side& s, bool lower) { return 3 * s.tri + ((s.forward == lower) ? s.corner : (s.corner + 1) % 3); };
+  for_each_edge(he, [&](std::span<const Side> run) {
+    // A side from a vertex to itself links nothing: a triangle naming v twice beside w has both
+    // its corners at v on the edge vw, and one naming v thrice shares no other vertex.
+    if (run[0].lo == run[0].hi) return;
+    for (std::size_t i = 1; i < run.size(); ++i) {
+      corners.unite(at(run[i - 1], true), at(run[i], true));
+      corners.unite(at(run[i - 1], false), at(run[i], false));
+    }
+  });
+  std::vector<std::uint8_t> fans(vertices, 0);  // 0, 1, or 2 for more than one
+  for (std::uint32_t k = 0; k < 3 * T.size(); ++k)
+    if (corners.find(k) == k) {
+      std::uint8_t& f = fans[T[k / 3][k % 3]];
+      f = std::uint8_t(std::min(f + 1, 2));
+    }
+  for (const std::uint8_t f : fans) {
+    c.unused_vertices += f == 0;
+    c.nonmanifold_vertices += f == 2;
+  }
 }
 
 // Components, Euler characteristic and genus.
@@ -191,16 +173,18 @@ MeshChecks census(const TriangleMesh& mesh, bool full) {
   const std::vector<Side> he = sides_by_edge(P.size(), T);
   UnionFind tris(full ? T.size() : 0);
   edge_census(he, full ? &tris : nullptr, c);
-  // Each vertex's triangles.
-  std::vector<std::uint32_t> start(P.size() + 1, 0);
-  for (const auto& t : T)
-    for (int k = 0; k < 3; ++k) ++start[t[k] + 1];
-  std::partial_sum(start.begin(), start.end(), start.begin());
-  std::vector<std::uint32_t> incident(start.back()), fill(start.begin(), start.end() - 1);
-  for (std::uint32_t t = 0; t < T.size(); ++t)
-    for (int k = 0; k < 3; ++k) incident[fill[T[t][k]]++] = t;
-  fan_census(T, start, incident, c);
-  if (full) component_census(T, he, tris, start, incident, c);
+  fan_census(T, he, P.size(), c);
+  if (full) {
+    // Each vertex's triangles.
+    std::vector<std::uint32_t> start(P.size() + 1, 0);
+    for (const auto& t : T)
+      for (int k = 0; k < 3; ++k) ++start[t[k] + 1];
+    std::partial_sum(start.begin(), start.end(), start.begin());
+    std::vector<std::uint32_t> incident(start.back()), fill(start.begin(), start.end() - 1);
+    for (std::uint32_t t = 0; t < T.size(); ++t)
+      for (int k = 0; k < 3; ++k) incident[fill[T[t][k]]++] = t;
+    component_census(T, he, tris, start, incident, c);
+  }
   geometry_census(mesh, full, c);
   return c;
 }

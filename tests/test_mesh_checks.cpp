@@ -122,6 +122,61 @@ TEST(MeshChecks, CountsEveryDefectExactlyWhateverTheNumbering) {
 
 namespace {
 
+// Vertex fans on random index soups (few vertices, so that fins, bow ties, repeated corners and
+// unused vertices come up), against the definition counted pairwise: the triangles at v, each
+// once per corner at v, linked when they share a vertex besides v, form one group.
+TEST(MeshChecks, VertexFansMatchTheirPairwiseDefinition) {
+  test::Rng rng = test::seeded();
+  std::size_t nonmanifold_seen = 0;
+  for (int trial = 0; trial < 400; ++trial) {
+    const std::uint32_t vertices = 4 + std::uint32_t(rng() % 6);
+    TriangleMesh m;
+    for (std::uint32_t v = 0; v < vertices; ++v) m.positions.push_back(glm::dvec3(v, v * v % 7, v % 3));
+    const std::size_t faces = 1 + rng() % 12;
+    for (std::size_t f = 0; f < faces; ++f) {
+      glm::uvec3 t(std::uint32_t(rng() % vertices), std::uint32_t(rng() % vertices), std::uint32_t(rng() % vertices));
+      if (rng() % 8 != 0)  // mostly proper triangles, sometimes a corner named twice
+        while (t[1] == t[0] || t[2] == t[0] || t[2] == t[1])
+          t = {std::uint32_t(rng() % vertices), std::uint32_t(rng() % vertices), std::uint32_t(rng() % vertices)};
+      m.triangles.push_back(t);
+    }
+    std::size_t unused = 0, nonmanifold = 0;
+    for (std::uint32_t v = 0; v < vertices; ++v) {
+      std::vector<std::uint32_t> at;  // a triangle once per corner at v
+      for (std::uint32_t t = 0; t < m.triangles.size(); ++t)
+        for (int k = 0; k < 3; ++k)
+          if (m.triangles[t][k] == v) at.push_back(t);
+      if (at.empty()) {
+        ++unused;
+        continue;
+      }
+      std::vector<std::uint32_t> group(at.size());
+      std::iota(group.begin(), group.end(), 0u);
+      auto root = [&](std::uint32_t x) {
+        while (group[x] != x) x = group[x];
+        return x;
+      };
+      for (std::uint32_t i = 0; i < at.size(); ++i)
+        for (std::uint32_t j = i + 1; j < at.size(); ++j) {
+          bool shared = false;
+          for (int x = 0; x < 3; ++x)
+            for (int y = 0; y < 3; ++y)
+              shared |= m.triangles[at[i]][x] == m.triangles[at[j]][y] && m.triangles[at[i]][x] != v;
+          if (shared) group[root(i)] = root(j);
+        }
+      std::size_t roots = 0;
+      for (std::uint32_t i = 0; i < at.size(); ++i) roots += root(i) == i;
+      nonmanifold += roots > 1;
+    }
+    nonmanifold_seen += nonmanifold;
+    for (const MeshChecks& c : {check_watertight(m), check_mesh(m, false)}) {
+      EXPECT_EQ(c.unused_vertices, unused) << "trial " << trial;
+      EXPECT_EQ(c.nonmanifold_vertices, nonmanifold) << "trial " << trial;
+    }
+  }
+  EXPECT_GT(nonmanifold_seen, 100u);  // the soups do hold non-manifold vertices
+}
+
 TEST(MeshChecks, KeptTrianglesAreTheLeafsOwnBitForBit) {
   const auto leaf = MeshLeaf::load(test::cgal_mesh("eight.off"));
   TriangleMesh mesh = *leaf->surface();
