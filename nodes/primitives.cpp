@@ -76,16 +76,27 @@ double distance_to_cone_sphere(const double* s, const glm::dvec3& p) {
   return std::max(signed_dist, 0.0);
 }
 
+// |p - nearest point of [a, b]|^2, computed as distance_to_segment() computes it before its root.
+double distance2_to_segment(const glm::dvec3& p, const glm::dvec3& a, const glm::dvec3& b) {
+  const glm::dvec3 ab = b - a;
+  const double len2 = glm::dot(ab, ab);
+  const double t = len2 > 0.0 ? std::clamp(glm::dot(p - a, ab) / len2, 0.0, 1.0) : 0.0;
+  const glm::dvec3 d = p - (a + t * ab);
+  return glm::dot(d, d);
+}
+
 double distance_to_polyline(const double* s, const glm::dvec3& p) {
   const auto n = static_cast<std::size_t>(s[0]);
   const double* pts = s + 1;
   if (n == 1) return glm::length(p - vec_at(pts, 0));
-  double best = std::numeric_limits<double>::infinity();
+  // The least squared distance, then one square root: the same bits as the least of the
+  // distances (a correctly rounded square root keeps order), one root instead of dozens.
+  double best2 = std::numeric_limits<double>::infinity();
   for (std::size_t i = 0; i + 1 < n; ++i) {
     const auto k = static_cast<int>(3 * i);
-    best = std::min(best, distance_to_segment(p, vec_at(pts, k), vec_at(pts, k + 3)));
+    best2 = std::min(best2, distance2_to_segment(p, vec_at(pts, k), vec_at(pts, k + 3)));
   }
-  return best;
+  return std::sqrt(best2);
 }
 
 }  // namespace
@@ -96,10 +107,7 @@ double primitive_r0(double R, double F, double T) {
 }
 
 double distance_to_segment(const glm::dvec3& p, const glm::dvec3& a, const glm::dvec3& b) {
-  const glm::dvec3 ab = b - a;
-  const double len2 = glm::dot(ab, ab);
-  const double t = len2 > 0.0 ? std::clamp(glm::dot(p - a, ab) / len2, 0.0, 1.0) : 0.0;
-  return glm::length(p - (a + t * ab));
+  return std::sqrt(distance2_to_segment(p, a, b));
 }
 
 double distance_to_triangle(const glm::dvec3& p, const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3& c) {
