@@ -134,7 +134,7 @@ class DeepOctants {
 // The blend's own surface where two operands act, cut to where every g_i >= eps, pulled back
 // one ring and its loops straightened: the far side of the bands.
 TriangleMesh blend_patch(const LocalInput& in, const BlendFields& bf, const std::vector<Aabb>& meets, const Aabb& clip,
-                         const TapeEvaluator& field, LocalStats& st) {
+                         const BatchGradient& field, LocalStats& st) {
   const Graph* graph = in.graph.get();
   const auto c = graph->children_of(in.node);
   const double T = in.threshold, eps = bf.eps;
@@ -188,7 +188,7 @@ TriangleMesh blend_patch(const LocalInput& in, const BlendFields& bf, const std:
 
 // The operands' trimmed meshes and the patch joined by bands, evened out and untangled.
 TriangleMesh close_with_bands(const std::vector<TriangleMesh>& pieces, const TriangleMesh& side, const Aabb& clip,
-                              const TapeEvaluator& field, const LocalInput& in, LocalStats& st) {
+                              const BatchGradient& field, const LocalInput& in, LocalStats& st) {
   std::vector<const TriangleMesh*> ops;
   for (const TriangleMesh& piece : pieces)
     if (!piece.triangles.empty()) ops.push_back(&piece);
@@ -245,8 +245,9 @@ TriangleMesh trim_blend(const LocalInput& in, LocalStats* stats) {
   if (meets.empty()) {
     out = join(pieces, seam_options(in, true), st);  // nothing meets: the operands' meshes as they are
   } else {
-    const auto field = node_tape(in);
-    out = close_with_bands(pieces, blend_patch(in, bf, meets, clip, *field, st), clip, *field, in, st);
+    SurfaceField surface = node_surface(in);
+    const BatchGradient field = gradient_of(surface);
+    out = close_with_bands(pieces, blend_patch(in, bf, meets, clip, field, st), clip, field, in, st);
   }
   if (stats) *stats = st;
   return out;
@@ -297,11 +298,12 @@ TriangleMesh trim_local_blend(const LocalInput& in, LocalStats* stats) {
       fr(points, values);
       for (double& v : values) v = eps - v;
     };
-    const auto field = node_tape(in);
+    SurfaceField surface = node_surface(in);
+    const BatchGradient field = gradient_of(surface);
     TriangleMesh side = pull_back_boundary(cut_mesh(p, in_region, cut_options(in)));
-    relax_boundary(side, *field, T);
+    relax_boundary(side, field, T);
     st.patch_triangles = side.triangles.size();
-    out = close_with_bands({joined}, side, acts, *field, in, st);
+    out = close_with_bands({joined}, side, acts, field, in, st);
   }
   if (stats) *stats = st;
   return out;

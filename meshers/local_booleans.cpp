@@ -61,7 +61,7 @@ TriangleMesh boolean_step(const LocalInput& in, NodeKind kind, BooleanOperand& a
     std::vector<std::uint8_t> seam;
     out = join(pieces, seam_options(in, false), st, &seam);
     // The seam is the crease: it stays. Only where the operands meet can the result intersect.
-    st.self_intersections = untangle(out, seam, node_field, T, near).size();
+    st.self_intersections = untangle(out, seam, gradient_of(node_field), T, near).size();
     if (st.self_intersections == 0 || round == 2) break;
     Aabb hot;
     for (const auto& pair : intersections_in(out, near))

@@ -142,6 +142,10 @@ std::shared_ptr<const TapeEvaluator> node_tape(const LocalInput& in) {
   return std::make_shared<const TapeEvaluator>(std::make_shared<const Tape>(compile_tape(in.graph, in.node, in.threshold)));
 }
 
+SurfaceField node_surface(const LocalInput& in) {
+  return SurfaceField(in.graph, in.node, in.threshold, glm::dvec3(0.0), kSurfaceBrickCells * in.precision);
+}
+
 // The operands' pieces as one mesh, in the order bridge() lays them out.
 TriangleMesh join_operands(const std::vector<const TriangleMesh*>& ops) {
   TriangleMesh m;
@@ -152,7 +156,7 @@ TriangleMesh join_operands(const std::vector<const TriangleMesh*>& ops) {
 // Evens out the band: the patch's vertices along it and one ring behind them move toward their
 // neighbours' centroid within the tangent plane and back onto the node's surface. The operands'
 // vertices stay where they are.
-void relax_band(TriangleMesh& m, std::uint32_t first_patch, const TapeEvaluator& field, double T) {
+void relax_band(TriangleMesh& m, std::uint32_t first_patch, const BatchGradient& field, double T) {
   std::vector<std::uint8_t> band(m.positions.size(), 0), patch(m.positions.size(), 0);
   for (const glm::uvec3& t : m.triangles) {
     const bool mixed = (t[0] < first_patch || t[1] < first_patch || t[2] < first_patch) &&

@@ -5,6 +5,7 @@
 
 #include "meshers/cut.hpp"
 #include "meshers/local_ops.hpp"
+#include "meshers/surface_field.hpp"
 #include "runtime/tape_eval.hpp"
 
 #include <functional>
@@ -85,11 +86,17 @@ TriangleMesh join(const std::vector<TriangleMesh>& pieces, const StitchOptions& 
                   std::vector<std::uint8_t>* seam = nullptr);
 /// The node's own field, where a result's vertices are projected back.
 std::shared_ptr<const TapeEvaluator> node_tape(const LocalInput& in);
+/// The same field on tapes specialized to bricks of kSurfaceBrickCells precisions (on a lattice
+/// through the origin, compiled as points reach them): what the passes that move many vertices
+/// (relaxation, remeshing, untangling) evaluate, since the node's whole tape pays for every
+/// primitive of a big tree at every point.
+SurfaceField node_surface(const LocalInput& in);
+inline constexpr double kSurfaceBrickCells = 16.0;
 /// The operands' pieces as one mesh, in the order bridge() lays them out.
 TriangleMesh join_operands(const std::vector<const TriangleMesh*>& ops);
 /// Evens out a band: the patch's vertices along it (those from `first_patch` on that share a
 /// triangle with an operand's) and one ring behind them relax, projected onto the node's surface.
-void relax_band(TriangleMesh& m, std::uint32_t first_patch, const TapeEvaluator& field, double T);
+void relax_band(TriangleMesh& m, std::uint32_t first_patch, const BatchGradient& field, double T);
 std::size_t count_triangles(const std::vector<TriangleMesh>& pieces);
 
 }  // namespace ht::local

@@ -231,7 +231,7 @@ void resolve_folds(TriangleMesh& mesh, std::vector<std::uint8_t>& crease, const 
         for (int k = 0; k < 3; ++k) near.grow(mesh.positions[mesh.triangles[t][k]]);
     if (crease.size() != mesh.positions.size()) crease.resize(mesh.positions.size(), 0);
     const std::vector<std::uint8_t> none(mesh.positions.size(), 0);
-    const auto left = untangle(mesh, none, eval, T, near.expanded(2.0 * h), kUntangleRounds, crease);
+    const auto left = untangle(mesh, none, gradient_of(eval), T, near.expanded(2.0 * h), kUntangleRounds, crease);
     // untangle searched only its region; the pairs outside it are those unfold left there.
     std::vector<std::array<std::uint32_t, 2>> all = left;
     for (const auto& pair : pairs) {
@@ -264,7 +264,7 @@ void crease_phase(RootField& field, const FeatureOptions& features, double h, Tr
   for (std::size_t v = 0; v < on_crease.size(); ++v)
     if (on_crease[v]) near.grow(mesh.positions[v]);
   const std::vector<std::uint8_t> none(mesh.positions.size(), 0);
-  auto left = untangle(mesh, none, eval, field.T, near.expanded(2.0 * h), kUntangleRounds, on_crease);
+  auto left = untangle(mesh, none, gradient_of(eval), field.T, near.expanded(2.0 * h), kUntangleRounds, on_crease);
   stats.unfold.pairs_before = stats.crease_intersections = left.size();
   resolve_folds(mesh, on_crease, eval, field.T, h, left, stats);
 }

@@ -43,11 +43,11 @@ Neighbours neighbours_of(const TriangleMesh& m, const std::vector<std::uint32_t>
 }
 
 // Newton steps onto {f = T}.
-void project(std::vector<glm::dvec3>& at, const TapeEvaluator& field, double T, int steps) {
+void project(std::vector<glm::dvec3>& at, const BatchGradient& field, double T, int steps) {
   std::vector<glm::dvec3> grad(at.size());
   std::vector<double> value(at.size());
   for (int s = 0; s < steps; ++s) {
-    field.gradient(at, value, grad);
+    field(at, value, grad);
     for (std::size_t i = 0; i < at.size(); ++i) {
       const double g2 = glm::dot(grad[i], grad[i]);
       if (g2 > 0 && std::isfinite(g2)) at[i] -= (value[i] - T) / g2 * grad[i];
@@ -90,7 +90,7 @@ std::vector<std::array<std::uint32_t, 2>> intersections_among(const TriangleMesh
 
 }  // namespace
 
-void relax_boundary(TriangleMesh& mesh, const TapeEvaluator& field, double T, int iterations) {
+void relax_boundary(TriangleMesh& mesh, const BatchGradient& field, double T, int iterations) {
   const auto loops = boundary_loops(mesh);
   std::vector<std::uint8_t> on_loop(mesh.positions.size(), 0), all(mesh.positions.size(), 1);
   for (const auto& l : loops)
@@ -156,7 +156,7 @@ std::vector<std::array<std::uint32_t, 2>> intersections_near(const TriangleMesh&
 }
 
 std::vector<std::array<std::uint32_t, 2>> untangle(TriangleMesh& mesh, std::span<const std::uint8_t> fixed,
-                                                   const TapeEvaluator& field, double T, const Aabb& region, int rounds,
+                                                   const BatchGradient& field, double T, const Aabb& region, int rounds,
                                                    std::span<const std::uint8_t> crease) {
   std::vector<std::uint8_t> far(mesh.positions.size());
   for (std::size_t v = 0; v < far.size(); ++v) far[v] = !fixed[v] && (crease.empty() || !crease[v]);
@@ -198,7 +198,7 @@ std::vector<std::uint8_t> rings_around(const TriangleMesh& mesh, std::span<const
   return out;
 }
 
-void newton_onto(std::vector<glm::dvec3>& at, const TapeEvaluator& field, double T, int steps,
+void newton_onto(std::vector<glm::dvec3>& at, const BatchGradient& field, double T, int steps,
                  std::span<const double> settled) {
   std::vector<std::uint32_t> who(at.size());
   std::iota(who.begin(), who.end(), 0u);
@@ -207,7 +207,7 @@ void newton_onto(std::vector<glm::dvec3>& at, const TapeEvaluator& field, double
   for (int s = 0; s < steps && !who.empty(); ++s) {
     pts.resize(who.size()), grad.resize(who.size()), value.resize(who.size());
     for (std::size_t k = 0; k < who.size(); ++k) pts[k] = at[who[k]];
-    field.gradient(pts, value, grad);
+    field(pts, value, grad);
     std::size_t kept = 0;
     for (std::size_t k = 0; k < who.size(); ++k) {
       const double g2 = glm::dot(grad[k], grad[k]);
@@ -220,7 +220,7 @@ void newton_onto(std::vector<glm::dvec3>& at, const TapeEvaluator& field, double
   }
 }
 
-void relax_vertices(TriangleMesh& mesh, std::span<const std::uint8_t> movable, const TapeEvaluator& field, double T,
+void relax_vertices(TriangleMesh& mesh, std::span<const std::uint8_t> movable, const BatchGradient& field, double T,
                     const RelaxOptions& o) {
   std::vector<std::uint32_t> moving;
   for (std::uint32_t v = 0; v < mesh.positions.size(); ++v)
@@ -231,7 +231,7 @@ void relax_vertices(TriangleMesh& mesh, std::span<const std::uint8_t> movable, c
   std::vector<double> settled(moving.size());
   for (int it = 0; it < o.iterations; ++it) {
     for (std::size_t i = 0; i < moving.size(); ++i) at[i] = mesh.positions[moving[i]];
-    field.gradient(at, {}, grad);
+    field(at, {}, grad);
     for (std::size_t i = 0; i < moving.size(); ++i) {
       glm::dvec3 c(0.0);
       double ring = 0.0;

@@ -1,12 +1,14 @@
 // Tangential relaxation with projection: the vertices a caller chooses move toward the centroid
 // of their neighbours within their tangent plane, then back onto the surface {f = T} by Newton
-// steps on a tape. The local strategies run it on the few rings of patch vertices next to a
-// seam, where moving the seam onto the exact operand's polyline left thin or folded triangles.
+// steps on the field's gradients (meshers/batch_field.hpp: a tape's, or a SurfaceField's bricks').
+// The local strategies run it on the few rings of patch vertices next to a seam, where moving
+// the seam onto the exact operand's polyline left thin or folded triangles.
 //
 // Jacobi iterations (every vertex moves from the previous iteration's positions), so the result
 // does not depend on the order of vertices or on the thread count.
 #pragma once
 
+#include "meshers/batch_field.hpp"
 #include "meshers/triangle_mesh.hpp"
 #include "runtime/aabb.hpp"
 
@@ -18,27 +20,25 @@
 
 namespace ht {
 
-class TapeEvaluator;
-
 struct RelaxOptions {
   int iterations = 4;
   int newton_steps = 2;
 };
 
 /// Moves the vertices with movable[v] != 0; every other vertex stays bit for bit.
-void relax_vertices(TriangleMesh& mesh, std::span<const std::uint8_t> movable, const TapeEvaluator& field, double threshold,
+void relax_vertices(TriangleMesh& mesh, std::span<const std::uint8_t> movable, const BatchGradient& field, double threshold,
                     const RelaxOptions& options = {});
 
 /// Newton steps onto {f = T} along the gradient, at most `steps`: a point whose step was no longer
 /// than settled[i] (world units) takes no more, the next being about the curvature times that
 /// step squared.
-void newton_onto(std::vector<glm::dvec3>& at, const TapeEvaluator& field, double threshold, int steps,
+void newton_onto(std::vector<glm::dvec3>& at, const BatchGradient& field, double threshold, int steps,
                  std::span<const double> settled);
 
 /// Straightens every boundary loop of `mesh`: each loop vertex moves halfway toward the midpoint
 /// of its two loop neighbours, then back onto {f = T}; the vertices one ring inside follow by
 /// tangential relaxation, so the loop's own triangles do not fold.
-void relax_boundary(TriangleMesh& mesh, const TapeEvaluator& field, double threshold, int iterations = 3);
+void relax_boundary(TriangleMesh& mesh, const BatchGradient& field, double threshold, int iterations = 3);
 
 /// The intersecting triangle pairs among the triangles whose boxes meet `region` (where a local
 /// strategy changed the mesh: the rest is the operands' own), as pairs of triangle indices.
@@ -61,7 +61,7 @@ double longest_edge(const TriangleMesh& mesh);
 /// of their two crease neighbours. At most `rounds` rounds; returns the intersecting pairs left in
 /// the region (triangle indices, lower first).
 std::vector<std::array<std::uint32_t, 2>> untangle(TriangleMesh& mesh, std::span<const std::uint8_t> fixed,
-                                                   const TapeEvaluator& field, double threshold, const Aabb& region,
+                                                   const BatchGradient& field, double threshold, const Aabb& region,
                                                    int rounds = 3, std::span<const std::uint8_t> crease = {});
 
 /// The vertices within `rings` edges of a seed, reached through vertices that `allowed` accepts;

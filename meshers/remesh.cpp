@@ -34,7 +34,7 @@ class Remesher {
   // `sub` holds the triangles being remeshed; origin[v] is each vertex's index in the whole
   // mesh; locked[v] those that must stay (outside the region, fixed, or on the rim).
   Remesher(const TriangleMesh& sub, const std::vector<std::uint32_t>& origin, const std::vector<std::uint8_t>& locked,
-           const TapeEvaluator& field, double T, double target)
+           const BatchGradient& field, double T, double target)
       : field_(field), T_(T), L_(target) {
     ok_ = to_openmesh(sub, locked, origin, m_, locked_, origin_);
     m_.add_property(creased_);
@@ -82,7 +82,7 @@ class Remesher {
       for (const auto v : {k.a, k.b, k.c, k.d}) at.push_back(g(m_.point(v)));
     grad.resize(at.size());
     value.resize(at.size());
-    field_.gradient(at, value, grad);
+    field_(at, value, grad);
     auto turns = [&](std::size_t i, std::size_t j) {
       const double li = glm::length(grad[i]), lj = glm::length(grad[j]);
       return !(li > 0 && lj > 0) || glm::dot(grad[i], grad[j]) < kCreaseCos * li * lj;
@@ -362,7 +362,7 @@ class Remesher {
   OpenMesh::VPropHandleT<bool> locked_;
   OpenMesh::VPropHandleT<bool> creased_;  // locked by lock_creases() alone (not a rim, not fixed)
   OpenMesh::VPropHandleT<std::uint32_t> origin_;
-  const TapeEvaluator& field_;
+  const BatchGradient& field_;
   double T_, L_;
   bool ok_ = false;
 };
@@ -370,7 +370,7 @@ class Remesher {
 // Each part remeshed on its own, in parallel, its rim and `fixed` vertices locked; put back in
 // part order (renumber: as put_back).
 void remesh_parts(TriangleMesh& mesh, const Pieces& pieces, std::span<const std::uint8_t> fixed,
-                  const TapeEvaluator& field, double threshold, const RemeshOptions& options, RemeshStats& st,
+                  const BatchGradient& field, double threshold, const RemeshOptions& options, RemeshStats& st,
                   std::vector<std::uint32_t>* renumber) {
   const std::size_t n = pieces.parts.size();
   std::vector<TriangleMesh> changed(n);
@@ -398,7 +398,7 @@ void remesh_parts(TriangleMesh& mesh, const Pieces& pieces, std::span<const std:
 }  // namespace
 
 void remesh_region(TriangleMesh& mesh, std::span<const std::uint8_t> region, std::span<const std::uint8_t> fixed,
-                   const TapeEvaluator& field, double threshold, const RemeshOptions& options, RemeshStats* stats) {
+                   const BatchGradient& field, double threshold, const RemeshOptions& options, RemeshStats* stats) {
   RemeshStats st;
   // Slabs of the region first, in parallel, each triangle with a corner in the region and all
   // three in one slab; a vertex that any other triangle uses is on a rim and stays.

@@ -1,9 +1,9 @@
 // Isotropic remeshing of a region of a mesh on its implicit surface (Botsch & Kobbelt 2004), on
 // an OpenMesh halfedge mesh with its validity checks: split edges longer than 4/3 of the target
-// (the new vertex projected onto {f = T} by Newton steps on the tape), collapse edges shorter
-// than 4/5 (is_collapse_ok, and no triangle turned over), flip edges toward valence 6 where the
-// two triangles are nearly coplanar (is_flip_ok), and relax vertices tangentially, projected
-// back onto the surface. Last, the slivers those rounds leave (under 15 degrees, mostly beside the
+// (the new vertex projected onto {f = T} by Newton steps on the field's gradients), collapse
+// edges shorter than 4/5 (is_collapse_ok, and no triangle turned over), flip edges toward
+// valence 6 where the two triangles are nearly coplanar (is_flip_ok), and relax vertices
+// tangentially, projected back onto the surface. Last, the slivers those rounds leave (under 15 degrees, mostly beside the
 // locked rim) lose an edge by a collapse from a free corner, or their longest edge by a flip, when
 // that leaves the faces around less thin. The local strategies run it where they made new
 // triangles: their seams, fans and bands, whose slivers it removes.
@@ -21,14 +21,13 @@
 // the same at any thread count.
 #pragma once
 
+#include "meshers/batch_field.hpp"
 #include "meshers/triangle_mesh.hpp"
 
 #include <cstdint>
 #include <span>
 
 namespace ht {
-
-class TapeEvaluator;
 
 struct RemeshOptions {
   double target = 0.0;  ///< edge length aimed at (world units); > 0
@@ -43,6 +42,6 @@ struct RemeshStats {
 /// Remeshes the triangles with a corner in `region` (one flag per vertex); `fixed` vertices do
 /// not move. Deterministic. The caller checks the result.
 void remesh_region(TriangleMesh& mesh, std::span<const std::uint8_t> region, std::span<const std::uint8_t> fixed,
-                   const TapeEvaluator& field, double threshold, const RemeshOptions& options, RemeshStats* stats = nullptr);
+                   const BatchGradient& field, double threshold, const RemeshOptions& options, RemeshStats* stats = nullptr);
 
 }  // namespace ht

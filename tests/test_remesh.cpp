@@ -49,7 +49,7 @@ TEST(Remesh, EveryVertexEndsOnTheSurface) {
     RemeshOptions ro;
     ro.target = h;
     RemeshStats st;
-    remesh_region(m, region, fixed, field, kT, ro, &st);
+    remesh_region(m, region, fixed, gradient_of(field), kT, ro, &st);
     ASSERT_GT(st.collapses, 100u) << "scene " << scene;
     const MeshChecks c = check_mesh(m);
     EXPECT_TRUE(c.manifold()) << "scene " << scene;
