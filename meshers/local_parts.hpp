@@ -15,13 +15,18 @@
 
 namespace ht::local {
 
-// A node's field at points, exactly 0 outside its support box without running the tape there
-// (most of a large mesh leaf lies outside a small operand's support).
+/// The side, in precisions, of the bricks the local strategies' fields are specialized to
+/// (NodeField, node_surface()).
+inline constexpr double kSurfaceBrickCells = 16.0;
+
+// A node's field at points, exactly 0 outside its support box without evaluating there (most of
+// a large mesh leaf lies outside a small operand's support), and inside it on tapes specialized
+// to bricks of kSurfaceBrickCells precisions (SurfaceField). Copies share the bricks.
 class NodeField {
  public:
   NodeField(const LocalInput& in, NodeId node, bool under_blend)
-      : eval_(std::make_shared<const TapeEvaluator>(
-            std::make_shared<const Tape>(compile_tape(in.graph, node, in.threshold, nullptr, under_blend)))),
+      : bricks_(std::make_shared<SurfaceField>(in.graph, node, in.threshold, glm::dvec3(0.0),
+                                               kSurfaceBrickCells * in.precision, under_blend)),
         support_(in.graph->support(node, under_blend)) {}
 
   void operator()(std::span<const glm::dvec3> points, std::span<double> values) const {
@@ -35,13 +40,13 @@ class NodeField {
       }
     }
     std::vector<double> v(inside.size());
-    if (!inside.empty()) eval_->field(inside, v);
+    if (!inside.empty()) bricks_->values(inside, v);
     for (std::size_t k = 0; k < where.size(); ++k) values[where[k]] = v[k];
   }
   const Aabb& support() const { return support_; }
 
  private:
-  std::shared_ptr<const TapeEvaluator> eval_;
+  std::shared_ptr<SurfaceField> bricks_;  // its values() may run from several threads at once
   Aabb support_;
 };
 
@@ -91,7 +96,6 @@ std::shared_ptr<const TapeEvaluator> node_tape(const LocalInput& in);
 /// (relaxation, remeshing, untangling) evaluate, since the node's whole tape pays for every
 /// primitive of a big tree at every point.
 SurfaceField node_surface(const LocalInput& in);
-inline constexpr double kSurfaceBrickCells = 16.0;
 /// The operands' pieces as one mesh, in the order bridge() lays them out.
 TriangleMesh join_operands(const std::vector<const TriangleMesh*>& ops);
 /// Evens out a band: the patch's vertices along it (those from `first_patch` on that share a
