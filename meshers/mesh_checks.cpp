@@ -158,10 +158,6 @@ void geometry_census(const TriangleMesh& mesh, bool full, MeshChecks& c) {
   if (!smallest.empty()) c.min_angle_p1 = min_and_p1(smallest).second;
 }
 
-}  // namespace
-
-namespace {
-
 // The figures of check_mesh() but the intersections; with `full` false only those
 // check_watertight() fills.
 MeshChecks census(const TriangleMesh& mesh, bool full) {

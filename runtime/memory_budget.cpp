@@ -9,7 +9,7 @@ namespace ht {
 
 std::string format_bytes(double bytes) {
   char buf[64];
-  if (!(bytes < 1e24)) return "more than 10^15 GiB";  // NaN too
+  if (!(bytes < 1e15 * double(1u << 30))) return "more than 10^15 GiB";  // NaN too
   if (bytes >= double(1u << 30))
     std::snprintf(buf, sizeof buf, "%.2f GiB", bytes / double(1u << 30));
   else if (bytes >= double(1u << 20))
