@@ -15,8 +15,12 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <array>
+#include <functional>
+#include <numeric>
 #include <cmath>
 #include <mutex>
+#include <span>
 #include <string>
 #include <tuple>
 #include <vector>
@@ -149,17 +153,39 @@ TriangleMesh blend_patch(const LocalInput& in, const BlendFields& bf, const std:
   // its edge's ends; tests/test_polygonize.cpp LeavingOutOneSidedOctantsChangesNoTriangle).
   // Whether an octant's box (widened) is kept, and whether it is deep (DeepOctants). A lower
   // bound of what all but the largest |f| add up to: the bounds' sum less the largest bound.
-  auto test = [graph, c, eps, T](const Aabb& box, bool& deep) {
+  // The children cheapest to bound first (by subtree size): all but the last bounding the sum of
+  // the |f| but the largest from above, a box they leave under eps is turned down before the
+  // costliest child's interval is taken (the wings beside a body of 250 curves).
+  std::vector<std::size_t> order(c.size());
+  std::iota(order.begin(), order.end(), std::size_t(0));
+  std::vector<std::size_t> size(graph->size(), 0);
+  const std::function<std::size_t(NodeId)> count = [&](NodeId n) {
+    std::size_t k = 1;
+    for (NodeId ch : graph->children_of(n)) k += count(ch);
+    return size[n] = k;
+  };
+  for (NodeId child : c) count(child);
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return size[c[a]] < size[c[b]]; });
+  auto test = [graph, c, order, eps, T](const Aabb& box, bool& deep) {
+    deep = false;
+    std::array<Interval, kMaxLocalBlendOperands> iv{};  // c.size() of them (trim_blend checks)
+    double known = 0.0;
+    for (std::size_t k = 0; k < order.size(); ++k) {
+      // The sum of all |f| but the largest is at most the sum of those known so far.
+      if (k + 1 == order.size() && k > 0 && known < eps) return false;
+      iv[order[k]] = field_interval(*graph, c[order[k]], T, box, true);
+      known += std::max(iv[order[k]].hi, -iv[order[k]].lo);
+    }
+    // Summed in the children's order.
     double sum = 0.0, largest = 0.0, least_sum = 0.0, least_largest = 0.0;
     Interval blend;
-    for (NodeId child : c) {
-      const Interval iv = field_interval(*graph, child, T, box, true);
-      const double bound = std::max(iv.hi, -iv.lo), least = iv.lo > 0 ? iv.lo : iv.hi < 0 ? -iv.hi : 0.0;
+    for (const Interval& i : std::span(iv).first(c.size())) {
+      const double bound = std::max(i.hi, -i.lo), least = i.lo > 0 ? i.lo : i.hi < 0 ? -i.hi : 0.0;
       sum += bound;
       largest = std::max(largest, bound);
       least_sum += least;
       least_largest = std::max(least_largest, least);
-      blend = interval::add(blend, iv);
+      blend = interval::add(blend, i);
     }
     deep = least_sum - least_largest >= 2.0 * eps;
     return sum - largest >= eps && blend.lo < T && blend.hi >= T;
