@@ -5,6 +5,7 @@
 #include "runtime/tape_eval.hpp"
 
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
 
 #include <algorithm>
 #include <cmath>
@@ -54,7 +55,7 @@ SurfaceField::Bins SurfaceField::bin(std::span<const glm::dvec3> points) {
   Bins b;
   b.order.resize(n);
   tbb::parallel_for(std::size_t(0), n, [&](std::size_t i) { b.order[i] = {key_of(points[i]), std::uint32_t(i)}; });
-  std::sort(b.order.begin(), b.order.end());
+  tbb::parallel_sort(b.order.begin(), b.order.end());  // keys are unique: one order at any thread count
   for (std::size_t i = 0; i < n; ++i)
     if (i == 0 || b.order[i].first != b.order[i - 1].first) b.runs.push_back(i);
   b.runs.push_back(n);
