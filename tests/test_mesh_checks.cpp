@@ -1,6 +1,7 @@
 // The mesh checks (meshers/mesh_checks.hpp): exact defect counts on small meshes whatever their
 // numbering; the angle census: which triangles are a mesh leaf's own, which lie at a crease, and
 // that the smooth ones' figures are the ones left.
+#include "meshers/edge_sides.hpp"
 #include "meshers/mesh_checks.hpp"
 #include "meshers/mesh_plan.hpp"
 #include "meshers/mesh_run.hpp"
@@ -14,6 +15,7 @@
 #include <gtest/gtest.h>
 
 #include <algorithm>
+#include <array>
 #include <numeric>
 #include <random>
 #include <cmath>
@@ -175,6 +177,32 @@ TEST(MeshChecks, VertexFansMatchTheirPairwiseDefinition) {
     }
   }
   EXPECT_GT(nonmanifold_seen, 100u);  // the soups do hold non-manifold vertices
+}
+
+// sides_by_edge's order, on index soups big enough to be counted in parallel ranges and small:
+// by (lo, hi, tri, corner), every side once, each with its own direction.
+TEST(MeshChecks, SidesComeByEdgeThenTriangle) {
+  test::Rng rng = test::seeded();
+  for (const std::size_t faces : {std::size_t(7), std::size_t(40000)}) {
+    const std::uint32_t vertices = faces < 100 ? 6 : 9000;
+    std::vector<glm::uvec3> tris(faces);
+    for (glm::uvec3& t : tris)
+      t = {std::uint32_t(rng() % vertices), std::uint32_t(rng() % vertices), std::uint32_t(rng() % vertices)};
+    std::vector<std::array<std::uint32_t, 4>> want;  // lo, hi, tri, corner
+    for (std::uint32_t t = 0; t < faces; ++t)
+      for (std::uint32_t k = 0; k < 3; ++k) {
+        const std::uint32_t a = tris[t][k], b = tris[t][(k + 1) % 3];
+        want.push_back({std::min(a, b), std::max(a, b), t, k});
+      }
+    std::sort(want.begin(), want.end());
+    const std::vector<Side> got = sides_by_edge(vertices, tris);
+    ASSERT_EQ(got.size(), want.size());
+    for (std::size_t i = 0; i < got.size(); ++i) {
+      const Side& s = got[i];
+      ASSERT_EQ((std::array<std::uint32_t, 4>{s.lo, s.hi, s.tri, s.corner}), want[i]) << faces << " faces, side " << i;
+      ASSERT_EQ(s.forward, tris[s.tri][s.corner] == s.lo && s.lo < s.hi) << i;
+    }
+  }
 }
 
 TEST(MeshChecks, KeptTrianglesAreTheLeafsOwnBitForBit) {
