@@ -5,6 +5,7 @@
 
 #include <glm/common.hpp>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
 
 #include <algorithm>
 #include <array>
@@ -29,7 +30,7 @@ std::vector<std::uint32_t> pinched_vertices(const TriangleMesh& mesh, std::span<
       const std::uint64_t a = mesh.triangles[t][k], b = mesh.triangles[t][(k + 1) % 3];
       edges.push_back(std::min(a, b) << 33 | std::max(a, b) << 1 | std::uint64_t(a > b));
     }
-  std::sort(edges.begin(), edges.end());
+  tbb::parallel_sort(edges.begin(), edges.end());  // plain keys: one order at any thread count
   std::vector<std::uint32_t> leaving;
   for (std::size_t i = 0; i < edges.size();) {
     std::size_t j = i + 1;
