@@ -23,6 +23,7 @@
 #include <filesystem>
 #include <memory>
 #include <mutex>
+#include <span>
 #include <stdexcept>
 #include <string>
 #include <unordered_map>
@@ -224,7 +225,13 @@ class MeshCache {
                                       MeshInside inside = MeshInside::Closed);
   std::size_t size() const { return meshes_.size(); }
 
+  /// Loads the files asked for that are not held yet, in parallel (a scene's meshes are
+  /// independent). A file that fails to load is left out, silently: get() loads it again and
+  /// throws its error where the caller can say where it was named.
+  void prefetch(std::span<const MeshFileRequest> requests);
+
  private:
+  static std::string key(const std::filesystem::path& file, bool repair, MeshInside inside);
   std::unordered_map<std::string, std::shared_ptr<const MeshLeaf>> meshes_;
 };
 

@@ -8,6 +8,7 @@
 
 #include <OpenMesh/Core/IO/MeshIO.hh>
 #include <OpenMesh/Core/IO/importer/ImporterT.hh>
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cctype>
@@ -15,6 +16,7 @@
 #include <iterator>
 #include <sstream>
 #include <string_view>
+#include <vector>
 
 namespace ht {
 
@@ -327,15 +329,41 @@ const TriMeshHolder& MeshLeaf::openmesh() const {
   return *openmesh_;
 }
 
-std::shared_ptr<const MeshLeaf> MeshCache::get(const std::filesystem::path& file, bool repair, MeshInside inside) {
+std::string MeshCache::key(const std::filesystem::path& file, bool repair, MeshInside inside) {
   std::error_code ec;
   std::filesystem::path key_path = std::filesystem::weakly_canonical(std::filesystem::absolute(file), ec);
   if (ec) key_path = std::filesystem::absolute(file).lexically_normal();
-  const std::string key = key_path.string() + (repair ? "\n+repair" : "\n") + to_string(inside);
-  if (auto it = meshes_.find(key); it != meshes_.end()) return it->second;
+  return key_path.string() + (repair ? "\n+repair" : "\n") + to_string(inside);
+}
+
+std::shared_ptr<const MeshLeaf> MeshCache::get(const std::filesystem::path& file, bool repair, MeshInside inside) {
+  const std::string k = key(file, repair, inside);
+  if (auto it = meshes_.find(k); it != meshes_.end()) return it->second;
   auto leaf = MeshLeaf::load(file, repair, inside);
-  meshes_.emplace(key, leaf);
+  meshes_.emplace(k, leaf);
   return leaf;
+}
+
+void MeshCache::prefetch(std::span<const MeshFileRequest> requests) {
+  std::vector<std::string> keys;
+  std::vector<const MeshFileRequest*> todo;
+  for (const MeshFileRequest& r : requests) {
+    std::string k = key(r.file, r.repair, r.inside);
+    if (meshes_.count(k) || std::find(keys.begin(), keys.end(), k) != keys.end()) continue;
+    keys.push_back(std::move(k));
+    todo.push_back(&r);
+  }
+  if (todo.size() < 2) return;  // one file: get() loads it as soon
+  std::vector<std::shared_ptr<const MeshLeaf>> loaded(todo.size());
+  tbb::parallel_for(std::size_t(0), todo.size(), [&](std::size_t i) {
+    try {
+      loaded[i] = MeshLeaf::load(todo[i]->file, todo[i]->repair, todo[i]->inside);
+    } catch (const std::exception&) {
+      // get() says what is wrong, with where the scene names the file.
+    }
+  });
+  for (std::size_t i = 0; i < todo.size(); ++i)
+    if (loaded[i]) meshes_.emplace(keys[i], std::move(loaded[i]));
 }
 
 }  // namespace ht

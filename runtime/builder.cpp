@@ -159,6 +159,13 @@ NodeId Builder::mesh(const std::filesystem::path& file, Falloff f, bool repair, 
   return mesh(std::move(leaf), f);
 }
 
+void Builder::prefetch_meshes(std::span<const MeshFileRequest> files) {
+  std::vector<MeshFileRequest> full(files.begin(), files.end());
+  for (MeshFileRequest& r : full)
+    if (!r.file.is_absolute() && !base_dir_.empty()) r.file = base_dir_ / r.file;
+  cache_->prefetch(full);
+}
+
 NodeId Builder::mesh(std::shared_ptr<const MeshLeaf> leaf, Falloff f) {
   check_falloff(f);
   if (!(std::abs(f.strength) > threshold_))

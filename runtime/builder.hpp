@@ -76,6 +76,9 @@ class Builder {
   NodeId mesh(const std::filesystem::path& file, Falloff f, bool repair = false,
               MeshInside inside = MeshInside::Closed);
   NodeId mesh(std::shared_ptr<const MeshLeaf> leaf, Falloff f);
+  /// Loads these mesh files (paths as mesh() takes them) in parallel ahead of the mesh() calls
+  /// that will name them; a file that fails is left for mesh() to report.
+  void prefetch_meshes(std::span<const MeshFileRequest> files);
 
   // Operators.
   NodeId blend(std::span<const NodeId> children);

@@ -332,6 +332,33 @@ MesherSettings parse_mesher(Obj& top) {
   return s;
 }
 
+// The mesh files a scene's tree names, for loading them all at once before the tree is built
+// (they are independent, and loading dominates a scene's set-up). A walk without recursion and
+// without judgement: what it cannot read as a mesh file is left to the loader, which reports it.
+std::vector<MeshFileRequest> mesh_files(const json& root) {
+  std::vector<MeshFileRequest> out;
+  std::vector<const json*> todo{&root};
+  while (!todo.empty()) {
+    const json& j = *todo.back();
+    todo.pop_back();
+    if (j.is_array()) {
+      for (const json& e : j) todo.push_back(&e);
+      continue;
+    }
+    if (!j.is_object()) continue;
+    const auto type = j.find("type"), file = j.find("file");
+    if (type != j.end() && *type == "mesh" && file != j.end() && file->is_string()) {
+      MeshFileRequest r{file->get<std::string>()};
+      if (const auto repair = j.find("repair"); repair != j.end() && repair->is_boolean()) r.repair = repair->get<bool>();
+      if (const auto inside = j.find("inside"); inside != j.end() && *inside == "winding") r.inside = MeshInside::Winding;
+      out.push_back(std::move(r));
+    }
+    for (const auto& [key, value] : j.items())
+      if (value.is_object() || value.is_array()) todo.push_back(&value);
+  }
+  return out;
+}
+
 }  // namespace
 
 Tree load_scene_text(const std::string& text, const std::filesystem::path& base_dir, const std::string& source) {
@@ -362,6 +389,7 @@ Tree load_scene_text(const std::string& text, const std::filesystem::path& base_
     Builder b(T);
     b.set_base_dir(base_dir);
     b.set_mesher_settings(settings);
+    b.prefetch_meshes(mesh_files(top.get("root")));
     Loader loader(b);
     const NodeId root = loader.node(top.get("root"), "root", 0);
     top.finish();

@@ -1,5 +1,6 @@
 // Scene format v1: every node type loads, and every malformed scene is rejected with the JSON
 // path of the offending value and the rule it breaks (table-driven).
+#include "nodes/mesh_leaf.hpp"
 #include "runtime/scene.hpp"
 #include "runtime/tree_eval.hpp"
 #include "tests/support/test_support.hpp"
@@ -201,6 +202,38 @@ TEST(Scene, SameMeshNamedTwiceIsLoadedOnce) {
   test::write_file(dir / "s.json", text);
   const Tree t = load_scene(dir / "s.json");
   EXPECT_EQ(t.graph().meshes.size(), 1u);
+  std::filesystem::remove_all(dir);
+}
+
+// A scene's mesh files are loaded together before its tree is built; one that fails is still
+// reported where the scene names it, and the good ones are the same leaves as loaded alone.
+TEST(Scene, MeshesLoadTogetherAndAFailingOneIsNamedWhereItStands) {
+  const auto dir = test::temp_dir("scene-prefetch");
+  std::filesystem::copy_file(test::cgal_mesh("sphere.off"), dir / "sphere.off");
+  std::filesystem::copy_file(test::cgal_mesh("eight.off"), dir / "eight.off");
+  test::write_file(dir / "bad.off", "OFF\n4 4 0\n0 0 0\n1 0 0\n0 nan 0\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n");
+  const std::string good = R"({"type": "blend", "children": [
+      {"type": "mesh", "file": "sphere.off", "radius": 0.1},
+      {"type": "affine", "translate": [3,0,0], "child": {"type": "mesh", "file": "eight.off", "radius": 0.2}}]})";
+  test::write_file(dir / "good.json", scene(good));
+  const Tree t = load_scene(dir / "good.json");
+  ASSERT_EQ(t.graph().meshes.size(), 2u);
+  const auto alone = MeshLeaf::load(dir / "eight.off");
+  const auto& leaf = *t.graph().meshes[1];
+  EXPECT_EQ(leaf.positions(), alone->positions());
+  EXPECT_EQ(leaf.triangles(), alone->triangles());
+  test::write_file(dir / "bad.json", scene(R"({"type": "blend", "children": [
+      {"type": "mesh", "file": "sphere.off", "radius": 0.1},
+      {"type": "mesh", "file": "eight.off", "radius": 0.1},
+      {"type": "mesh", "file": "bad.off", "radius": 0.1}]})"));
+  try {
+    load_scene(dir / "bad.json");
+    ADD_FAILURE() << "a mesh with a non-finite coordinate loaded";
+  } catch (const SceneError& e) {
+    const std::string what = e.what();
+    EXPECT_NE(what.find("children[2].file: "), std::string::npos) << what;
+    EXPECT_NE(what.find("non-finite"), std::string::npos) << what;
+  }
   std::filesystem::remove_all(dir);
 }
 
