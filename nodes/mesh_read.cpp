@@ -16,6 +16,7 @@
 #include <iterator>
 #include <sstream>
 #include <string_view>
+#include <unordered_set>
 #include <vector>
 
 namespace ht {
@@ -347,9 +348,10 @@ std::shared_ptr<const MeshLeaf> MeshCache::get(const std::filesystem::path& file
 void MeshCache::prefetch(std::span<const MeshFileRequest> requests) {
   std::vector<std::string> keys;
   std::vector<const MeshFileRequest*> todo;
+  std::unordered_set<std::string> asked;
   for (const MeshFileRequest& r : requests) {
     std::string k = key(r.file, r.repair, r.inside);
-    if (meshes_.count(k) || std::find(keys.begin(), keys.end(), k) != keys.end()) continue;
+    if (meshes_.count(k) || !asked.insert(k).second) continue;
     keys.push_back(std::move(k));
     todo.push_back(&r);
   }
