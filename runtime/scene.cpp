@@ -342,7 +342,8 @@ std::vector<MeshFileRequest> mesh_files(const json& root) {
     const json& j = *todo.back();
     todo.pop_back();
     if (j.is_array()) {
-      for (const json& e : j) todo.push_back(&e);
+      for (const json& e : j)
+        if (e.is_object() || e.is_array()) todo.push_back(&e);  // not a curve's numbers one by one
       continue;
     }
     if (!j.is_object()) continue;
