@@ -114,8 +114,9 @@ struct Instruction {
 static_assert(sizeof(Instruction) == 8, "instructions stay 8 bytes: a tape streams through L1 once per block");
 
 /// A Curve instruction's constants: the primitive header (4), its support box lo, hi (6), the
-/// segment count S, then a box lo, hi (6) for each group of kCurveGroup consecutive segments,
-/// then per segment a, b - a, 1/|b - a|^2 (7).
+/// segment count S, then a box lo, hi (6) for each of the G groups of kCurveGroup consecutive
+/// segments, then each group's ball (centre and the square of its reach: R plus the group's
+/// radius, 4), then per segment a, b - a, 1/|b - a|^2 (7).
 inline constexpr int kCurveGroup = 8;
 
 /// Thrown when a node cannot be compiled (an ffd before meshing exists, a tree too deep).

@@ -250,6 +250,7 @@ class Compiler {
         constants({static_cast<double>(segments)});
         // The box of each group of kCurveGroup segments: a chunk of points skips the groups
         // that lie farther than what it has already found.
+        std::vector<Aabb> boxes;
         for (std::size_t g0 = 0; g0 < segments; g0 += kCurveGroup) {
           Aabb box;
           for (std::size_t i = g0; i < std::min(segments, g0 + kCurveGroup); ++i) {
@@ -258,6 +259,18 @@ class Compiler {
           }
           push3(box.lo);
           push3(box.hi);
+          boxes.push_back(box);
+        }
+        // Each group's ball: its box's centre, and the squared distance beyond which a point is
+        // farther than R from every segment of the group. The slack (relative, and absolute for
+        // coordinates far from the origin) keeps out only points whose float distance gives a
+        // field of exactly 0: the lanes outside every ball are 0 without a segment's distance.
+        for (std::size_t g = 0; g < boxes.size(); ++g) {
+          const glm::dvec3 c = boxes[g].center();
+          const double reach = (R + 0.5 * glm::length(boxes[g].size())) * (1.0 + 1e-4) +
+                               1e-5 * (1.0 + std::max({std::abs(c.x), std::abs(c.y), std::abs(c.z)}));
+          push3(c);
+          constants({reach * reach});
         }
         for (std::size_t i = 0; i < segments; ++i) {
           const glm::dvec3 a = v(1 + 3 * static_cast<int>(i)), ab = end(i) - a;

@@ -88,14 +88,30 @@ HT_LANE float box_gap2(const float* lo, const float* hi, const float* group) {
 // whose box is nearest its own, then only the groups whose box comes nearer than the farthest of
 // its lanes' distances so far (capped by R^2, where the falloff ends): a farther group cannot
 // hold a lane's nearest segment where the field is nonzero. The slack covers float rounding.
+// Where a curve's parts lie among its constants (runtime/tape.hpp).
+struct CurveParts {
+  int segments, groups;
+  const float* boxes;  // 6 a group
+  const float* balls;  // 4 a group: centre, reach^2
+  const float* seg;    // 7 a segment
+};
+HT_LANE CurveParts curve_parts(const float* k) {
+  CurveParts c{};
+  c.segments = static_cast<int>(k[10]);
+  c.groups = (c.segments + kCurveGroup - 1) / kCurveGroup;
+  c.boxes = k + 11;
+  c.balls = c.boxes + 6 * c.groups;
+  c.seg = c.balls + 4 * c.groups;
+  return c;
+}
+
 template <bool kWhich>
 HT_LANE void nearest_segments(const float* gx, const float* gy, const float* gz, int padded, const float* k, float* d,
                               int* at) {
-  const float* s = k + 10;
-  const int segments = static_cast<int>(s[0]);
-  const int groups = (segments + kCurveGroup - 1) / kCurveGroup;
-  const float* boxes = s + 1;
-  const float* seg = boxes + 6 * groups;
+  const CurveParts parts = curve_parts(k);
+  const int segments = parts.segments, groups = parts.groups;
+  const float* boxes = parts.boxes;
+  const float* seg = parts.seg;
   for (int c0 = 0; c0 < padded; c0 += kChunk) {
     float lo[3] = {gx[c0], gy[c0], gz[c0]}, hi[3] = {gx[c0], gy[c0], gz[c0]};
     for (int j = c0; j < c0 + kChunk; ++j) {
@@ -157,6 +173,33 @@ HT_LANE int gather_lanes(const T* x, const T* y, const T* z, int n, int count, c
   return m;
 }
 
+// Of the m gathered lanes, those within some group's ball, moved to the front (their order
+// kept) and padded as gather_lanes pads. In the support box of a short curve (the snake's are a
+// tenth of their radius long) half the lanes lie outside the ball: they are 0 with no segment
+// run. Returns their count.
+HT_LANE int keep_within_balls(const CurveParts& parts, float* gx, float* gy, float* gz, int m, std::uint16_t* lane,
+                              int& padded) {
+  alignas(64) std::uint8_t near[kBlock + kChunk];
+  for (int j = 0; j < padded; ++j) near[j] = 0;
+  for (int g = 0; g < parts.groups; ++g) {
+    const float* ball = parts.balls + 4 * g;
+    for (int j = 0; j < padded; ++j) {  // vectorized in every build
+      const float dx = gx[j] - ball[0], dy = gy[j] - ball[1], dz = gz[j] - ball[2];
+      near[j] |= static_cast<std::uint8_t>(dx * dx + dy * dy + dz * dz < ball[3]);
+    }
+  }
+  int kept = 0;
+  for (int j = 0; j < m; ++j) {
+    lane[kept] = lane[j];
+    gx[kept] = gx[j], gy[kept] = gy[j], gz[kept] = gz[j];
+    kept += near[j];
+  }
+  if (kept == 0) return 0;
+  padded = (kept + kChunk - 1) / kChunk * kChunk;
+  for (int j = kept; j < padded; ++j) lane[j] = lane[0], gx[j] = gx[0], gy[j] = gy[0], gz[j] = gz[0];
+  return kept;
+}
+
 template <class T>
 HT_LANE void curve_loop(const Block<T>& b, const Instruction& ins, const float* k, int n) {
   const T* x = b.axis(ins.a, 0);
@@ -166,7 +209,7 @@ HT_LANE void curve_loop(const Block<T>& b, const Instruction& ins, const float* 
   for (int i = 0; i < n; ++i) out[i] = T(0.0f);
   std::uint16_t lane[kBlock + kChunk];
   int padded = 0;
-  const int m = gather_lanes(x, y, z, n, b.count, k + 4, lane, padded);
+  int m = gather_lanes(x, y, z, n, b.count, k + 4, lane, padded);
   if (m == 0) return;
   alignas(64) float gx[kBlock + kChunk], gy[kBlock + kChunk], gz[kBlock + kChunk], d[kBlock + kChunk];
   alignas(64) int at[kBlock + kChunk];
@@ -175,11 +218,14 @@ HT_LANE void curve_loop(const Block<T>& b, const Instruction& ins, const float* 
     gy[j] = val(y[lane[j]]);
     gz[j] = val(z[lane[j]]);
   }
+  const CurveParts parts = curve_parts(k);
+  m = keep_within_balls(parts, gx, gy, gz, m, lane, padded);
+  if (m == 0) return;
+  const float* seg = parts.seg;
   constexpr bool kGradients = std::is_same_v<T, Dual>;
   if constexpr (kGradients) {
     nearest_segments<true>(gx, gy, gz, padded, k, d, at);
     // The min's derivative is its argument's: the nearest segment differentiated alone.
-    const float* seg = k + 11 + 6 * ((static_cast<int>(k[10]) + kCurveGroup - 1) / kCurveGroup);
     for (int j = 0; j < m; ++j) {
       const int i = lane[j];
       out[i] = falloff2(segment2(V3<Dual>{x[i], y[i], z[i]}, seg + 7 * at[j]), k);
@@ -187,8 +233,7 @@ HT_LANE void curve_loop(const Block<T>& b, const Instruction& ins, const float* 
   } else {
     // Values: one long vector loop per segment over every gathered lane runs faster than
     // skipping groups chunk by chunk (a brick's chunks rarely lie beyond a group).
-    const int segments = static_cast<int>(k[10]);
-    const float* seg = k + 11 + 6 * ((segments + kCurveGroup - 1) / kCurveGroup);
+    const int segments = parts.segments;
     for (int j = 0; j < padded; ++j) d[j] = std::numeric_limits<float>::max();
     for (int i = 0; i < segments; ++i)
       for (int j = 0; j < padded; ++j) d[j] = min_(d[j], segment2(V3<float>{gx[j], gy[j], gz[j]}, seg + 7 * i));  // vectorized in every build

@@ -3,6 +3,7 @@
 // specialization (equal inside the box, strictly shorter where the box misses supports), and
 // interval analysis holding every sampled value.
 #include "nodes/mesh_leaf.hpp"
+#include "nodes/primitives.hpp"
 #include "runtime/builder.hpp"
 #include "runtime/tape.hpp"
 #include "runtime/tape_eval.hpp"
@@ -14,7 +15,9 @@
 
 #include <cmath>
 #include <cstdio>
+#include <random>
 #include <stdexcept>
+#include <string>
 
 using namespace ht;
 using glm::dvec3;
@@ -121,6 +124,63 @@ TEST(Tape, EveryInstructionSetGivesTheSameValues) {
   for (const TapeIsa isa : builds) std::printf(" %s", tape_isa_name(isa));
   std::printf("\n");
   EXPECT_THROW(force_tape_isa(static_cast<TapeIsa>(200)), std::invalid_argument);
+}
+
+// A curve's lanes outside every group's ball (runtime/tape.hpp) are 0 without a distance: the
+// balls must reach R past the polyline, never less. Points in a thin shell around the support's
+// edge and anywhere in its box, on short curves (a tenth of R long, as the snake's) and long ones (R a tenth of their
+// length), in blocks of many points: every point nearer than R is nonzero on both the values'
+// and the gradients' path, every point farther is 0, and inside both equal the tree.
+TEST(Tape, CurvesVanishExactlyWhereTheirSupportEnds) {
+  test::Rng rng(57);
+  auto uniform = [&rng](double lo, double hi) { return std::uniform_real_distribution<double>(lo, hi)(rng); };
+  std::size_t near = 0, far = 0;
+  for (int trial = 0; trial < 60; ++trial) {
+    const bool short_curve = trial % 2 == 0;
+    const double R = short_curve ? 0.6 : 0.08;
+    const double scale = short_curve ? 0.06 : 1.0;
+    std::vector<dvec3> control;
+    for (int i = 0; i < 3 + trial % 4; ++i) control.push_back(scale * test::random_point(rng, 1.0) + dvec3(0.3, -0.2, 0.1));
+    Builder b(kT);
+    const NodeId root = b.curve(control, {R, 1.0});
+    const Tree t = b.build(root);
+    const TapeEvaluator eval(std::make_shared<const Tape>(compile_tape(t.graph_ptr(), root, kT)));
+    const double* skeleton = t.graph().skeleton_of(root);
+    std::vector<dvec3> pts;
+    for (int i = 0; i < 2000; ++i) {
+      const std::size_t span = std::size_t(uniform(0.0, double(control.size() - 1) - 1e-9));
+      const dvec3 on = catmull_rom(control, span, uniform(0.0, 1.0));
+      const dvec3 dir = glm::normalize(test::random_point(rng, 1.0) + dvec3(1e-9));
+      pts.push_back(on + R * (1.0 + uniform(-3e-3, 3e-3)) * dir);
+    }
+    // And anywhere in the support box, where the box's corners lie beyond the balls.
+    Aabb box;
+    for (const dvec3& c : control) box.grow(c);
+    box = box.expanded(1.1 * R);
+    for (int i = 0; i < 2000; ++i)
+      pts.push_back(box.lo + dvec3(uniform(0, 1), uniform(0, 1), uniform(0, 1)) * box.size());
+    std::vector<double> values(pts.size()), grad_values(pts.size());
+    std::vector<dvec3> grads(pts.size());
+    eval.field(pts, values);
+    eval.gradient(pts, grad_values, grads);
+    for (std::size_t i = 0; i < pts.size(); ++i) {
+      const double d = skeleton_distance(NodeKind::Curve, skeleton, pts[i]);
+      const std::string where = "trial " + std::to_string(trial) + " point " + std::to_string(i) + " at " +
+                                std::to_string(d / R) + " R";
+      if (d < R * (1.0 - 1e-4)) {
+        ++near;
+        ASSERT_GT(values[i], 0.0) << where;
+        ASSERT_GT(grad_values[i], 0.0) << where;
+        ASSERT_NEAR(values[i], reference_field(t.graph(), root, kT, pts[i]), 1e-4) << where;
+      } else if (d > R * (1.0 + 1e-4)) {
+        ++far;
+        ASSERT_EQ(values[i], 0.0) << where;
+        ASSERT_EQ(grad_values[i], 0.0) << where;
+      }
+    }
+  }
+  EXPECT_GT(near, 20000u);
+  EXPECT_GT(far, 20000u);
 }
 
 TEST(Tape, ChainsOfBlendsHoldTwoRegisters) {
