@@ -190,6 +190,56 @@ glm::dvec3 catmull_rom(std::span<const glm::dvec3> pts, std::size_t i, double t)
                 (-p0 + 3.0 * p1 - 3.0 * p2 + p3) * t3);
 }
 
+namespace {
+
+// One span of the spline, C(t) = a + b t + c t^2 + d t^3 on [0, 1], and its derivatives.
+struct Span {
+  glm::dvec3 a, b, c, d;
+  glm::dvec3 at(double t) const { return a + t * (b + t * (c + t * d)); }
+  glm::dvec3 velocity(double t) const { return b + t * (2.0 * c + 3.0 * t * d); }
+  glm::dvec3 bend(double t) const { return 2.0 * c + 6.0 * t * d; }  // C''
+};
+
+// Whether the chord of [t0, t1] lies within `tolerance` of the span there, both ways. Two bounds
+// on e(t) = C(t) - chord(t), which is 0 at both ends: |e| <= dt^2/8 max|C''| (the chord error of a
+// C2 curve), and, where C moves forward along the chord all the way (C' . u > 0, so every point
+// of the piece and of the chord has a partner with the same projection on it), the distance is
+// the part of e across the chord, bounded the same way by the part of C'' across it: near 0 on a
+// straight stretch however unevenly the spline runs along it (its repeated end points). C'' is
+// linear in t, so its norms peak at the ends; C' . u is quadratic.
+bool chord_fits(const Span& s, double t0, double t1, double tolerance) {
+  const double reach = (t1 - t0) * (t1 - t0) / 8.0;
+  const glm::dvec3 b0 = s.bend(t0), b1 = s.bend(t1);
+  if (reach * std::max(glm::length(b0), glm::length(b1)) <= tolerance) return true;
+  const glm::dvec3 chord = s.at(t1) - s.at(t0);
+  const double length = glm::length(chord);
+  if (!(length > 0.0)) return false;
+  const glm::dvec3 u = chord / length;
+  // C'(t) . u = q0 + q1 t + q2 t^2: its least value on [t0, t1].
+  const double q0 = glm::dot(s.b, u), q1 = 2.0 * glm::dot(s.c, u), q2 = 3.0 * glm::dot(s.d, u);
+  double least = std::min(q0 + t0 * (q1 + t0 * q2), q0 + t1 * (q1 + t1 * q2));
+  if (q2 != 0.0) {
+    const double v = -q1 / (2.0 * q2);
+    if (v > t0 && v < t1) least = std::min(least, q0 + v * (q1 + v * q2));
+  }
+  if (!(least > 0.0)) return false;
+  auto across = [&u](const glm::dvec3& x) { return glm::length(x - glm::dot(x, u) * u); };
+  return reach * std::max(across(b0), across(b1)) <= tolerance;
+}
+
+// The chords of [t0, t1], halved until each fits (at most 2^12 of them a span).
+void chords(const Span& s, double t0, double t1, double tolerance, int depth, std::vector<glm::dvec3>& out) {
+  if (depth >= 12 || chord_fits(s, t0, t1, tolerance)) {
+    out.push_back(s.at(t1));
+    return;
+  }
+  const double mid = 0.5 * (t0 + t1);
+  chords(s, t0, mid, tolerance, depth + 1, out);
+  chords(s, mid, t1, tolerance, depth + 1, out);
+}
+
+}  // namespace
+
 std::vector<glm::dvec3> curve_polyline(std::span<const glm::dvec3> pts, double tolerance) {
   std::vector<glm::dvec3> out;
   const std::size_t n = pts.size();
@@ -198,14 +248,10 @@ std::vector<glm::dvec3> curve_polyline(std::span<const glm::dvec3> pts, double t
   for (std::size_t i = 0; i + 1 < n; ++i) {
     const glm::dvec3 p0 = pts[i == 0 ? 0 : i - 1], p1 = pts[i], p2 = pts[i + 1],
                      p3 = pts[std::min(i + 2, n - 1)];
-    // C''(t) = (2p0 - 5p1 + 4p2 - p3) + 3(-p0 + 3p1 - 3p2 + p3) t is linear in t, so its norm
-    // peaks at an end of the span.
-    const glm::dvec3 c2 = 2.0 * p0 - 5.0 * p1 + 4.0 * p2 - p3;
-    const glm::dvec3 c3 = 3.0 * (-p0 + 3.0 * p1 - 3.0 * p2 + p3);
-    const double peak = std::max(glm::length(c2), glm::length(c2 + c3));
-    const double chords = std::ceil(std::sqrt(peak / (8.0 * tolerance)));
-    const int count = static_cast<int>(std::clamp(chords, 1.0, 4096.0));
-    for (int k = 1; k <= count; ++k) out.push_back(catmull_rom(pts, i, double(k) / count));
+    const Span span{p1, 0.5 * (p2 - p0), 0.5 * (2.0 * p0 - 5.0 * p1 + 4.0 * p2 - p3),
+                    0.5 * (-p0 + 3.0 * p1 - 3.0 * p2 + p3)};
+    chords(span, 0.0, 1.0, tolerance, 0, out);
+    out.back() = p2;  // the span's end exactly (the spline passes through its points)
   }
   return out;
 }

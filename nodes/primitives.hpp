@@ -57,8 +57,10 @@ double skeleton_distance(NodeKind kind, const double* skeleton, const glm::dvec3
 Aabb skeleton_bounds(NodeKind kind, const double* skeleton);
 
 /// Samples the uniform Catmull-Rom spline through `points` (end points repeated) into a polyline
-/// whose Hausdorff distance to the spline is at most `tolerance`: per span, n chords with
-/// n = ceil(sqrt(max|C''| / (8 tolerance))), the chord error bound of a C2 curve.
+/// whose Hausdorff distance to the spline is at most `tolerance`: each span's chords halved until
+/// each fits, by the chord error bound of a C2 curve (dt^2/8 max|C''|), or, where the spline runs
+/// forward along the chord, by the same bound on the part of C'' across it (a straight stretch is
+/// one chord however unevenly its parameter runs). At most 4096 chords a span.
 std::vector<glm::dvec3> curve_polyline(std::span<const glm::dvec3> points, double tolerance);
 
 /// The point of the uniform Catmull-Rom spline on span i (0 <= i < n-1) at t in [0, 1].

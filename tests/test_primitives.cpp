@@ -7,9 +7,12 @@
 #include <glm/geometric.hpp>
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <functional>
 #include <numbers>
+#include <random>
 
 using namespace ht;
 using glm::dvec3;
@@ -135,6 +138,74 @@ TEST(Primitives, CurvePolylineStaysWithinToleranceOfTheSpline) {
     EXPECT_NEAR(skeleton_distance(NodeKind::Curve, s, pts[0]), 0.0, 1e-12);
     EXPECT_NEAR(skeleton_distance(NodeKind::Curve, s, pts[1]), 0.0, 1e-12);
   }
+}
+
+// The polyline against the spline both ways (Hausdorff): every point of the spline (dense
+// samples) near the polyline, every point of the polyline near the spline, within the tolerance,
+// on the curves whose chords the across-the-chord bound makes long: nearly straight ones with
+// uneven control points (the spline runs unevenly along them), short ones beside their radius
+// (the snake's), and wild ones. A straight stretch takes one chord a span.
+TEST(Primitives, CurvePolylineIsWithinToleranceBothWays) {
+  test::Rng rng(17);
+  auto uniform = [&rng](double lo, double hi) { return std::uniform_real_distribution<double>(lo, hi)(rng); };
+  auto to_segment = [](const dvec3& p, const dvec3& a, const dvec3& b) {
+    const dvec3 ab = b - a;
+    const double len2 = glm::dot(ab, ab);
+    const double t = len2 > 0 ? std::clamp(glm::dot(p - a, ab) / len2, 0.0, 1.0) : 0.0;
+    return glm::length(p - (a + t * ab));
+  };
+  std::size_t chords = 0, parametric = 0;
+  for (int trial = 0; trial < 60; ++trial) {
+    const int kind = trial % 3;  // 0 nearly straight, 1 short, 2 wild
+    const dvec3 origin = test::random_point(rng, 1.0), dir = glm::normalize(test::random_point(rng, 1.0) + dvec3(1e-9));
+    std::vector<dvec3> pts;
+    double along = 0;
+    for (int i = 0; i < 3 + trial % 4; ++i) {
+      if (kind == 2) {
+        pts.push_back(test::random_point(rng, 1.0));
+        continue;
+      }
+      along += uniform(0.05, 1.0);
+      const dvec3 wobble = (kind == 0 ? 1e-3 : 0.02) * test::random_point(rng, 1.0);
+      pts.push_back(origin + (kind == 1 ? 0.1 : 1.0) * (along * dir + wobble));
+    }
+    const double tolerance = kCurveTolerance * 0.8;
+    const std::vector<dvec3> poly = curve_polyline(pts, tolerance);
+    if (kind != 2) {
+      chords += poly.size() - 1;
+      for (std::size_t i = 0; i + 1 < pts.size(); ++i) {  // the parametric bound alone: n = sqrt(max|C''| / 8 tol)
+        const dvec3 p0 = pts[i == 0 ? 0 : i - 1], p1 = pts[i], p2 = pts[i + 1], p3 = pts[std::min(i + 2, pts.size() - 1)];
+        const dvec3 c2 = 2.0 * p0 - 5.0 * p1 + 4.0 * p2 - p3, c3 = 3.0 * (-p0 + 3.0 * p1 - 3.0 * p2 + p3);
+        parametric += std::size_t(std::ceil(std::sqrt(std::max(glm::length(c2), glm::length(c2 + c3)) / (8.0 * tolerance))));
+      }
+    }
+    auto to_poly = [&](const dvec3& p) {
+      double d = 1e300;
+      for (std::size_t i = 0; i + 1 < poly.size(); ++i) d = std::min(d, to_segment(p, poly[i], poly[i + 1]));
+      return d;
+    };
+    std::vector<dvec3> dense;
+    for (std::size_t span = 0; span + 1 < pts.size(); ++span)
+      for (int k = 0; k <= 4000; ++k) dense.push_back(catmull_rom(pts, span, k / 4000.0));
+    double spline_to_poly = 0, poly_to_spline = 0;
+    for (std::size_t i = 0; i < dense.size(); i += 3) spline_to_poly = std::max(spline_to_poly, to_poly(dense[i]));
+    for (std::size_t i = 0; i + 1 < poly.size(); ++i)
+      for (int k = 0; k < 4; ++k) {
+        const dvec3 q = poly[i] + (k / 4.0) * (poly[i + 1] - poly[i]);
+        double d = 1e300;
+        for (std::size_t j = 0; j + 1 < dense.size(); ++j) d = std::min(d, to_segment(q, dense[j], dense[j + 1]));
+        poly_to_spline = std::max(poly_to_spline, d);
+      }
+    EXPECT_LE(spline_to_poly, tolerance * 1.001) << "trial " << trial;
+    EXPECT_LE(poly_to_spline, tolerance * 1.001) << "trial " << trial;
+  }
+  // The straight and short curves: a few chords a span, not the parametric bound's dozens.
+  EXPECT_LT(3 * chords, parametric) << chords << " chords where the parametric bound takes " << parametric;
+  std::printf("straight and short curves: %zu chords where the parametric bound takes %zu\n", chords, parametric);
+  const std::vector<dvec3> straight = {{0, 0, 0}, {0.1, 0, 0}, {1, 0, 0}, {1.2, 0, 0}};
+  bool forward = true;
+  for (const dvec3& p : curve_polyline(straight, 1e-6)) forward &= p.y == 0.0 && p.z == 0.0;
+  EXPECT_TRUE(forward);
 }
 
 TEST(Primitives, FalloffContract) {
