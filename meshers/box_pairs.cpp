@@ -105,22 +105,38 @@ std::optional<std::vector<std::vector<std::uint64_t>>> grid_box_pairs(std::span<
   // The pairs of each cell whose intersection's lower corner lies in it: that corner is the
   // larger of the two lower corners, and its cell (the cell function being monotone) the larger
   // of their cells, axis by axis.
-  tbb::enumerable_thread_specific<std::vector<std::uint64_t>> found;
+  // A cell's boxes are copied together first: the pairs then read them from cache, not from
+  // wherever their triangles lie in the mesh.
+  struct Local {
+    dvec3 lo, hi;
+    glm::u32vec3 first;
+    std::uint32_t box;
+  };
+  struct Scratch {
+    std::vector<std::uint64_t> found;
+    std::vector<Local> cell;
+  };
+  tbb::enumerable_thread_specific<Scratch> scratch;
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, cells, 4096), [&](const tbb::blocked_range<std::size_t>& range) {
-    auto& out = found.local();
+    Scratch& s = scratch.local();
     for (std::size_t c = range.begin(); c != range.end(); ++c) {
       if (start[c + 1] - start[c] < 2) continue;
       const glm::u32vec3 at(c % g.dims[0], (c / g.dims[0]) % g.dims[1], c / (g.dims[0] * g.dims[1]));
-      for (std::uint32_t a = start[c]; a < start[c + 1]; ++a)
-        for (std::uint32_t b = a + 1; b < start[c + 1]; ++b) {
-          const std::uint32_t i = boxes[a], j = boxes[b];
-          if (glm::max(first[i], first[j]) == at && overlap(lo[i], hi[i], lo[j], hi[j]))
-            out.push_back(std::uint64_t(i) << 32 | j);
+      s.cell.clear();
+      for (std::uint32_t a = start[c]; a < start[c + 1]; ++a) {
+        const std::uint32_t i = boxes[a];
+        s.cell.push_back({lo[i], hi[i], first[i], i});
+      }
+      for (std::size_t a = 0; a < s.cell.size(); ++a)
+        for (std::size_t b = a + 1; b < s.cell.size(); ++b) {
+          const Local &p = s.cell[a], &q = s.cell[b];
+          if (glm::max(p.first, q.first) == at && overlap(p.lo, p.hi, q.lo, q.hi))
+            s.found.push_back(std::uint64_t(p.box) << 32 | q.box);
         }
     }
   });
   std::vector<std::vector<std::uint64_t>> lists;
-  for (auto& v : found) lists.push_back(std::move(v));
+  for (auto& s : scratch) lists.push_back(std::move(s.found));
   return lists;
 }
 
