@@ -19,6 +19,7 @@
 #include <cmath>
 #include <numbers>
 #include <numeric>
+#include <span>
 #include <tuple>
 #include <vector>
 
@@ -49,39 +50,64 @@ std::pair<double, double> min_and_p1(std::vector<float>& angles) {
 }
 
 
-// Counts edges by use and direction, and with `tris` joins the triangles across each edge into
-// components.
-void edge_census(const std::vector<Side>& he, UnionFind* tris, MeshChecks& c) {
-  for_each_edge(he, [&](std::span<const Side> run) {
-    ++c.edges;
-    if (run.size() == 1) ++c.boundary_edges;
-    if (run.size() > 2) ++c.nonmanifold_edges;
-    if (run.size() == 2 && run[0].forward == run[1].forward) ++c.misoriented_edges;
-    if (tris)
-      for (const Side& s : run.subspan(1)) tris->unite(run[0].tri, s.tri);
-  });
+// The sides cut into about `pieces` ranges of whole edges (each range starts where an edge's
+// run does), for the parallel passes below.
+std::vector<std::size_t> edge_ranges(const std::vector<Side>& he, std::size_t pieces) {
+  std::vector<std::size_t> at{0};
+  for (std::size_t k = 1; k < pieces; ++k) {
+    std::size_t i = std::max(at.back(), he.size() * k / pieces);
+    while (i > 0 && i < he.size() && he[i].lo == he[i - 1].lo && he[i].hi == he[i - 1].hi) ++i;
+    if (i > at.back() && i < he.size()) at.push_back(i);
+  }
+  at.push_back(he.size());
+  return at;
 }
 
+// Edges by use and direction; vertex fans; with `tris`, the triangles joined across each edge
+// into components. Ranges of whole edges run in parallel, their counts summed in range order,
+// their unions into sets whose representatives (each set's smallest member) do not depend on
+// the order (meshers/union_find.hpp ConcurrentUnionFind).
+//
 // Vertex fans: the triangles around a vertex, linked through the edges at the vertex, must form
 // one group. Each triangle's corner stands for the triangle at that vertex; the sides of an edge
 // join their corners at each end, so each group of corners left is one fan.
-void fan_census(const std::vector<glm::uvec3>& T, const std::vector<Side>& he, std::size_t vertices, MeshChecks& c) {
-  UnionFind corners(3 * T.size());
+void edge_and_fan_census(const std::vector<glm::uvec3>& T, const std::vector<Side>& he, std::size_t vertices,
+                         ConcurrentUnionFind* tris, MeshChecks& c) {
+  ConcurrentUnionFind corners(3 * T.size());
   // The corner of a side's triangle at its lower (or upper) vertex.
   auto at = [](const Side& s, bool lower) { return 3 * s.tri + ((s.forward == lower) ? s.corner : (s.corner + 1) % 3); };
-  for_each_edge(he, [&](std::span<const Side> run) {
-    // A side from a vertex to itself links nothing: a triangle naming v twice beside w has both
-    // its corners at v on the edge vw, and one naming v thrice shares no other vertex.
-    if (run[0].lo == run[0].hi) return;
-    for (std::size_t i = 1; i < run.size(); ++i) {
-      corners.unite(at(run[i - 1], true), at(run[i], true));
-      corners.unite(at(run[i - 1], false), at(run[i], false));
-    }
+  const std::vector<std::size_t> ranges = edge_ranges(he, 64);
+  std::vector<std::array<std::size_t, 4>> counts(ranges.size() - 1, {0, 0, 0, 0});
+  tbb::parallel_for(std::size_t(0), ranges.size() - 1, [&](std::size_t r) {
+    std::array<std::size_t, 4>& k = counts[r];
+    for_each_edge(std::span(he).subspan(ranges[r], ranges[r + 1] - ranges[r]), [&](std::span<const Side> run) {
+      ++k[0];
+      if (run.size() == 1) ++k[1];
+      if (run.size() > 2) ++k[2];
+      if (run.size() == 2 && run[0].forward == run[1].forward) ++k[3];
+      if (tris)
+        for (const Side& side : run.subspan(1)) tris->unite(run[0].tri, side.tri);
+      // A side from a vertex to itself links nothing: a triangle naming v twice beside w has both
+      // its corners at v on the edge vw, and one naming v thrice shares no other vertex.
+      if (run[0].lo == run[0].hi) return;
+      for (std::size_t i = 1; i < run.size(); ++i) {
+        corners.unite(at(run[i - 1], true), at(run[i], true));
+        corners.unite(at(run[i - 1], false), at(run[i], false));
+      }
+    });
   });
+  for (const auto& k : counts) {
+    c.edges += k[0];
+    c.boundary_edges += k[1];
+    c.nonmanifold_edges += k[2];
+    c.misoriented_edges += k[3];
+  }
+  std::vector<std::uint8_t> root(3 * T.size());
+  tbb::parallel_for(std::size_t(0), root.size(), [&](std::size_t k) { root[k] = corners.find(std::uint32_t(k)) == k; });
   std::vector<std::uint8_t> fans(vertices, 0);  // 0, 1, or 2 for more than one
-  for (std::uint32_t k = 0; k < 3 * T.size(); ++k)
-    if (corners.find(k) == k) {
-      std::uint8_t& f = fans[T[k / 3][k % 3]];
+  for (std::size_t k = 0; k < root.size(); ++k)
+    if (root[k]) {
+      std::uint8_t& f = fans[T[k / 3][static_cast<glm::length_t>(k % 3)]];
       f = std::uint8_t(std::min(f + 1, 2));
     }
   for (const std::uint8_t f : fans) {
@@ -91,7 +117,7 @@ void fan_census(const std::vector<glm::uvec3>& T, const std::vector<Side>& he, s
 }
 
 // Components, Euler characteristic and genus.
-void component_census(const std::vector<glm::uvec3>& T, const std::vector<Side>& he, UnionFind& tris,
+void component_census(const std::vector<glm::uvec3>& T, const std::vector<Side>& he, ConcurrentUnionFind& tris,
                       const std::vector<std::uint32_t>& start, const std::vector<std::uint32_t>& incident,
                       MeshChecks& c) {
   std::vector<long> comp_v, comp_e, comp_f;
@@ -167,9 +193,8 @@ MeshChecks census(const TriangleMesh& mesh, bool full) {
   c.vertices = P.size();
   c.triangles = T.size();
   const std::vector<Side> he = sides_by_edge(P.size(), T);
-  UnionFind tris(full ? T.size() : 0);
-  edge_census(he, full ? &tris : nullptr, c);
-  fan_census(T, he, P.size(), c);
+  ConcurrentUnionFind tris(full ? T.size() : 0);
+  edge_and_fan_census(T, he, P.size(), full ? &tris : nullptr, c);
   if (full) {
     // Each vertex's triangles.
     std::vector<std::uint32_t> start(P.size() + 1, 0);

@@ -5,8 +5,12 @@
 #include "runtime/tape_eval.hpp"
 
 #include <glm/geometric.hpp>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
+#include <tbb/parallel_reduce.h>
 
 #include <algorithm>
+#include <atomic>
 #include <cmath>
 #include <numeric>
 
@@ -112,10 +116,18 @@ void relax_boundary(TriangleMesh& mesh, const BatchGradient& field, double T, in
 }
 
 double longest_edge(const TriangleMesh& mesh) {
-  double longest = 0;
-  for (const glm::uvec3& t : mesh.triangles)
-    for (int k = 0; k < 3; ++k) longest = std::max(longest, glm::length(mesh.positions[t[k]] - mesh.positions[t[(k + 1) % 3]]));
-  return longest;
+  // A maximum: the same whichever way the ranges split.
+  return tbb::parallel_reduce(
+      tbb::blocked_range<std::size_t>(0, mesh.triangles.size(), 4096), 0.0,
+      [&](const tbb::blocked_range<std::size_t>& r, double longest) {
+        for (std::size_t i = r.begin(); i != r.end(); ++i) {
+          const glm::uvec3& t = mesh.triangles[i];
+          for (int k = 0; k < 3; ++k)
+            longest = std::max(longest, glm::length(mesh.positions[t[k]] - mesh.positions[t[(k + 1) % 3]]));
+        }
+        return longest;
+      },
+      [](double a, double b) { return std::max(a, b); });
 }
 
 std::vector<std::array<std::uint32_t, 2>> intersections_in(const TriangleMesh& mesh, const Aabb& region) {
@@ -188,11 +200,19 @@ std::vector<std::uint8_t> rings_around(const TriangleMesh& mesh, std::span<const
   std::vector<std::uint8_t> reached(seeds.begin(), seeds.end()), out(mesh.positions.size(), 0);
   for (int r = 0; r < rings; ++r) {
     std::vector<std::uint8_t> next = reached;
-    for (const glm::uvec3& t : mesh.triangles) {
-      if (!reached[t[0]] && !reached[t[1]] && !reached[t[2]]) continue;
-      for (int k = 0; k < 3; ++k)
-        if (!reached[t[k]] && allowed[t[k]] && !seeds[t[k]]) next[t[k]] = 1, out[t[k]] = 1;
-    }
+    // Triangles in parallel: a flag is only ever set to 1, so any order of the stores leaves the
+    // same flags (atomic stores, since two triangles may set one vertex's at once).
+    tbb::parallel_for(tbb::blocked_range<std::size_t>(0, mesh.triangles.size(), 4096), [&](const tbb::blocked_range<std::size_t>& range) {
+      for (std::size_t i = range.begin(); i != range.end(); ++i) {
+        const glm::uvec3& t = mesh.triangles[i];
+        if (!reached[t[0]] && !reached[t[1]] && !reached[t[2]]) continue;
+        for (int k = 0; k < 3; ++k)
+          if (!reached[t[k]] && allowed[t[k]] && !seeds[t[k]]) {
+            std::atomic_ref<std::uint8_t>(next[t[k]]).store(1, std::memory_order_relaxed);
+            std::atomic_ref<std::uint8_t>(out[t[k]]).store(1, std::memory_order_relaxed);
+          }
+      }
+    });
     reached.swap(next);
   }
   return out;
