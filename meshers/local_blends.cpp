@@ -13,6 +13,7 @@
 #include <glm/common.hpp>
 #include <glm/vector_relational.hpp>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_invoke.h>
 
 #include <algorithm>
 #include <array>
@@ -259,21 +260,33 @@ TriangleMesh trim_blend(const LocalInput& in, LocalStats* stats) {
   Aabb clip;
   const std::vector<Aabb> meets = bf.meets(2.0 * in.precision, clip);
   std::vector<TriangleMesh> pieces;
-  for (std::size_t i = 0; i < c.size(); ++i) {
-    if (i >= in.child_meshes.size() || !in.child_meshes[i] || in.child_meshes[i]->triangles.empty()) continue;
-    const TriangleMesh& m = *in.child_meshes[i];
-    st.operand_triangles += m.triangles.size();
-    const BatchField cut = bf.cut(i);
-    pieces.push_back(clip.empty() ? cut_mesh(m, cut, cut_options(in)) : refined_and_cut(m, in, c[i], clip, cut));
-  }
-  st.kept_triangles = count_triangles(pieces);
+  auto cut_operands = [&] {
+    for (std::size_t i = 0; i < c.size(); ++i) {
+      if (i >= in.child_meshes.size() || !in.child_meshes[i] || in.child_meshes[i]->triangles.empty()) continue;
+      const TriangleMesh& m = *in.child_meshes[i];
+      st.operand_triangles += m.triangles.size();
+      const BatchField cut = bf.cut(i);
+      pieces.push_back(clip.empty() ? cut_mesh(m, cut, cut_options(in)) : refined_and_cut(m, in, c[i], clip, cut));
+    }
+    st.kept_triangles = count_triangles(pieces);
+  };
   TriangleMesh out;
   if (meets.empty()) {
+    cut_operands();
     out = join(pieces, seam_options(in, true), st);  // nothing meets: the operands' meshes as they are
   } else {
     SurfaceField surface = node_surface(in);
     const BatchGradient field = gradient_of(surface);
-    out = close_with_bands(pieces, blend_patch(in, bf, meets, clip, field, st), clip, field, in, st);
+    // The patch reads the fields only, the operands' cuts their meshes: the two run side by
+    // side, each filling the other's serial stretches (separate statistics, merged after).
+    TriangleMesh side;
+    LocalStats patch_stats;
+    tbb::parallel_invoke(cut_operands, [&] { side = blend_patch(in, bf, meets, clip, field, patch_stats); });
+    st.patched = patch_stats.patched;
+    st.patch_precision = patch_stats.patch_precision;
+    st.patch = patch_stats.patch;
+    st.patch_triangles = patch_stats.patch_triangles;
+    out = close_with_bands(pieces, side, clip, field, in, st);
   }
   if (stats) *stats = st;
   return out;
