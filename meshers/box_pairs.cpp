@@ -73,8 +73,24 @@ std::optional<Grid> grid_for(std::span<const dvec3> lo, std::span<const dvec3> h
 std::optional<std::vector<std::vector<std::uint64_t>>> grid_box_pairs(std::span<const dvec3> lo, std::span<const dvec3> hi,
                                                                       std::span<const std::uint8_t> skip,
                                                                       const BoxPairOptions& options) {
+  tbb::enumerable_thread_specific<std::vector<std::uint64_t>> found;
+  const bool gridded = grid_box_pairs(
+      lo, hi, skip,
+      [&](std::span<const std::uint64_t> batch) {
+        auto& out = found.local();
+        out.insert(out.end(), batch.begin(), batch.end());
+      },
+      options);
+  if (!gridded) return std::nullopt;
+  std::vector<std::vector<std::uint64_t>> lists;
+  for (auto& v : found) lists.push_back(std::move(v));
+  return lists;
+}
+
+bool grid_box_pairs(std::span<const dvec3> lo, std::span<const dvec3> hi, std::span<const std::uint8_t> skip,
+                    const std::function<void(std::span<const std::uint64_t>)>& each, const BoxPairOptions& options) {
   const std::optional<Grid> grid = grid_for(lo, hi, skip, options.max_cells_per_box);
-  if (!grid) return std::nullopt;
+  if (!grid) return false;
   const Grid& g = *grid;
   // The cells each box meets, from its lower corner's to its upper corner's.
   const std::size_t n = lo.size(), cells = g.dims[0] * g.dims[1] * g.dims[2];
@@ -95,7 +111,7 @@ std::optional<std::vector<std::vector<std::uint64_t>>> grid_box_pairs(std::span<
   for (std::size_t i = 0; i < n; ++i) {
     if (skip[i]) continue;
     for_cells(i, [&](std::size_t c) { ++start[c + 1], ++entries; });
-    if (entries > options.max_entries_per_box * double(n) + 1024.0 || entries > 4e9) return std::nullopt;
+    if (entries > options.max_entries_per_box * double(n) + 1024.0 || entries > 4e9) return false;
   }
   std::partial_sum(start.begin(), start.end(), start.begin());
   std::vector<std::uint32_t> boxes(start.back());
@@ -119,6 +135,7 @@ std::optional<std::vector<std::vector<std::uint64_t>>> grid_box_pairs(std::span<
   tbb::enumerable_thread_specific<Scratch> scratch;
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, cells, 4096), [&](const tbb::blocked_range<std::size_t>& range) {
     Scratch& s = scratch.local();
+    s.found.clear();
     for (std::size_t c = range.begin(); c != range.end(); ++c) {
       if (start[c + 1] - start[c] < 2) continue;
       const glm::u32vec3 at(c % g.dims[0], (c / g.dims[0]) % g.dims[1], c / (g.dims[0] * g.dims[1]));
@@ -134,10 +151,9 @@ std::optional<std::vector<std::vector<std::uint64_t>>> grid_box_pairs(std::span<
             s.found.push_back(std::uint64_t(p.box) << 32 | q.box);
         }
     }
+    if (!s.found.empty()) each(s.found);
   });
-  std::vector<std::vector<std::uint64_t>> lists;
-  for (auto& s : scratch) lists.push_back(std::move(s.found));
-  return lists;
+  return true;
 }
 
 }  // namespace ht

@@ -13,6 +13,7 @@
 #include <glm/vec3.hpp>
 
 #include <cstdint>
+#include <functional>
 #include <optional>
 #include <span>
 #include <vector>
@@ -32,5 +33,11 @@ std::optional<std::vector<std::vector<std::uint64_t>>> grid_box_pairs(std::span<
                                                                       std::span<const glm::dvec3> hi,
                                                                       std::span<const std::uint8_t> skip,
                                                                       const BoxPairOptions& options = {});
+
+/// The same pairs handed over as they are found, batch by batch (a batch: the pairs of a range of
+/// cells, in no order), to `each`, called from TBB's worker threads, several at once; nothing is
+/// stored beyond a batch. False (and no call) when the boxes are not even enough for a grid.
+bool grid_box_pairs(std::span<const glm::dvec3> lo, std::span<const glm::dvec3> hi, std::span<const std::uint8_t> skip,
+                    const std::function<void(std::span<const std::uint64_t>)>& each, const BoxPairOptions& options = {});
 
 }  // namespace ht
