@@ -2,6 +2,7 @@
 // numbering; the angle census: which triangles are a mesh leaf's own, which lie at a crease, and
 // that the smooth ones' figures are the ones left.
 #include "meshers/edge_sides.hpp"
+#include "meshers/edges.hpp"
 #include "meshers/mesh_checks.hpp"
 #include "meshers/mesh_plan.hpp"
 #include "meshers/mesh_run.hpp"
@@ -13,6 +14,8 @@
 #include <glm/geometric.hpp>
 #include <glm/gtc/matrix_transform.hpp>
 #include <gtest/gtest.h>
+
+#include <map>
 
 #include <algorithm>
 #include <array>
@@ -127,6 +130,47 @@ namespace {
 // Vertex fans on random index soups (few vertices, so that fins, bow ties, repeated corners and
 // unused vertices come up), against the definition counted pairwise: the triangles at v, each
 // once per corner at v, linked when they share a vertex besides v, form one group.
+// boundary_edges against its definition: the edges exactly one side lies on (a corner named
+// twice makes a side from a vertex to itself), with that side's direction and slot, ordered by
+// lower then upper vertex; on soups small and large (past the size the sides are counted in
+// parallel ranges), where edges are shared by one, two or more sides.
+TEST(MeshChecks, BoundaryEdgesAreTheEdgesOneSideLiesOn) {
+  test::Rng rng = test::seeded();
+  std::size_t found = 0;
+  for (int trial = 0; trial < 60; ++trial) {
+    const bool large = trial % 10 == 0;
+    const std::uint32_t vertices = large ? 3000 : 4 + std::uint32_t(rng() % 12);
+    const std::size_t faces = large ? 40000 : 1 + rng() % 30;
+    TriangleMesh m;
+    m.positions.assign(vertices, glm::dvec3(0.0));
+    for (std::size_t f = 0; f < faces; ++f) {
+      glm::uvec3 t(std::uint32_t(rng() % vertices), std::uint32_t(rng() % vertices), std::uint32_t(rng() % vertices));
+      if (rng() % 8 != 0)
+        while (t[1] == t[0] || t[2] == t[0] || t[2] == t[1])
+          t = {std::uint32_t(rng() % vertices), std::uint32_t(rng() % vertices), std::uint32_t(rng() % vertices)};
+      m.triangles.push_back(t);
+    }
+    std::map<std::pair<std::uint32_t, std::uint32_t>, std::vector<BoundaryEdge>> by_edge;
+    for (std::uint32_t t = 0; t < m.triangles.size(); ++t)
+      for (std::uint32_t k = 0; k < 3; ++k) {
+        const std::uint32_t a = m.triangles[t][k], b = m.triangles[t][(k + 1) % 3];
+        by_edge[{std::min(a, b), std::max(a, b)}].push_back({a, b, 3 * t + k});
+      }
+    std::vector<BoundaryEdge> expected;
+    for (const auto& [edge, sides] : by_edge)
+      if (sides.size() == 1) expected.push_back(sides[0]);
+    const std::vector<BoundaryEdge> got = boundary_edges(m);
+    ASSERT_EQ(got.size(), expected.size()) << "trial " << trial;
+    for (std::size_t i = 0; i < got.size(); ++i) {
+      ASSERT_EQ(got[i].from, expected[i].from) << "trial " << trial << " edge " << i;
+      ASSERT_EQ(got[i].to, expected[i].to) << "trial " << trial << " edge " << i;
+      ASSERT_EQ(got[i].slot, expected[i].slot) << "trial " << trial << " edge " << i;
+    }
+    found += got.size();
+  }
+  EXPECT_GT(found, 1000u);
+}
+
 TEST(MeshChecks, VertexFansMatchTheirPairwiseDefinition) {
   test::Rng rng = test::seeded();
   std::size_t nonmanifold_seen = 0;
