@@ -160,19 +160,26 @@ std::vector<EdgeVertex> join_bricks(const std::vector<BrickOutput>& outputs, Tri
   });
   tbb::parallel_sort(refs.begin(), refs.end(),
                      [](const Ref& x, const Ref& y) { return x.key != y.key ? x.key < y.key : x.rank < y.rank; });
-  // The keeper of each key becomes a mesh vertex; every copy of the key maps to it.
-  std::vector<std::uint32_t> id(refs.size());
-  std::vector<EdgeVertex> all;
+  // The keeper of each key becomes a mesh vertex, numbered in key order (a running count of the
+  // keys); every copy of the key maps to it. In parallel: each reference knows its vertex from
+  // the count.
+  std::vector<std::uint32_t> vertex(refs.size());
+  std::uint32_t keys = 0;
   for (std::size_t i = 0; i < refs.size(); ++i) {
-    if (i == 0 || refs[i].key != refs[i - 1].key) {
-      const std::size_t b =
-          std::size_t(std::upper_bound(offset.begin(), offset.end(), std::size_t(refs[i].slot)) - offset.begin()) - 1;
-      all.push_back(outputs[b].vertices[refs[i].slot - offset[b]]);
-    }
-    id[refs[i].slot] = static_cast<std::uint32_t>(all.size() - 1);
+    keys += i == 0 || refs[i].key != refs[i - 1].key;
+    vertex[i] = keys - 1;
   }
-  mesh.positions.resize(all.size());
-  for (std::size_t i = 0; i < all.size(); ++i) mesh.positions[i] = all[i].position;
+  std::vector<std::uint32_t> id(refs.size());
+  std::vector<EdgeVertex> all(keys);
+  mesh.positions.resize(keys);
+  tbb::parallel_for(std::size_t(0), refs.size(), [&](std::size_t i) {
+    id[refs[i].slot] = vertex[i];
+    if (i != 0 && refs[i].key == refs[i - 1].key) return;
+    const std::size_t b =
+        std::size_t(std::upper_bound(offset.begin(), offset.end(), std::size_t(refs[i].slot)) - offset.begin()) - 1;
+    all[vertex[i]] = outputs[b].vertices[refs[i].slot - offset[b]];
+    mesh.positions[vertex[i]] = all[vertex[i]].position;
+  });
   // A triangle's keys are its own brick's vertices, which that brick holds sorted by key.
   mesh.triangles.resize(tri_offset.back());
   tbb::parallel_for(std::size_t(0), outputs.size(), [&](std::size_t b) {

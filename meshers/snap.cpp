@@ -5,6 +5,7 @@
 #include <glm/geometric.hpp>
 #include <glm/mat3x3.hpp>
 #include <glm/matrix.hpp>
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cmath>
@@ -32,16 +33,33 @@ struct ContractScratch {
   std::vector<std::uint64_t> edges, far;  // far: the outside edge of each triangle that survives
 };
 
+// The triangles at each vertex near a grid point, in triangle order (a vertex far from every grid
+// point has none listed): vertex v's are list[start[v], start[v + 1]).
+struct TrianglesOf {
+  std::vector<std::uint32_t> start, list;
+  TrianglesOf(const TriangleMesh& mesh, const std::vector<std::uint64_t>& near, std::uint64_t far) {
+    start.assign(mesh.positions.size() + 1, 0);
+    for (const glm::uvec3& t : mesh.triangles)
+      for (int c = 0; c < 3; ++c)
+        if (near[t[c]] != far) ++start[t[c] + 1];
+    for (std::size_t v = 0; v + 1 < start.size(); ++v) start[v + 1] += start[v];
+    list.resize(start.back());
+    std::vector<std::uint32_t> fill(start.begin(), start.end() - 1);
+    for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t)
+      for (int c = 0; c < 3; ++c)
+        if (near[mesh.triangles[t][c]] != far) list[fill[mesh.triangles[t][c]]++] = t;
+  }
+};
+
 // A cluster may merge when the patch it spans (its vertices, the edges and triangles among them)
 // is a disc, Euler characteristic V - E + F = 1, and every outside vertex next to it keeps a
 // manifold edge to the merged vertex: exactly two surviving triangles use that edge, and no
 // outside edge is in two of them (the link condition). `ring` receives the outside neighbours.
-bool contractible(const TriangleMesh& m, const std::vector<std::uint32_t>& cluster,
-                  const std::vector<std::vector<std::uint32_t>>& tris_of, std::vector<std::uint32_t>& ring,
-                  ContractScratch& scratch) {
+bool contractible(const TriangleMesh& m, const std::vector<std::uint32_t>& cluster, const TrianglesOf& tris_of,
+                  std::vector<std::uint32_t>& ring, ContractScratch& scratch) {
   auto& [tris, edges, far] = scratch;
   tris.clear(), edges.clear(), far.clear();
-  for (std::uint32_t v : cluster) tris.insert(tris.end(), tris_of[v].begin(), tris_of[v].end());
+  for (std::uint32_t v : cluster) tris.insert(tris.end(), tris_of.list.begin() + tris_of.start[v], tris_of.list.begin() + tris_of.start[v + 1]);
   std::sort(tris.begin(), tris.end());
   tris.erase(std::unique(tris.begin(), tris.end()), tris.end());
   auto in = [&](std::uint32_t v) { return std::binary_search(cluster.begin(), cluster.end(), v); };
@@ -188,10 +206,7 @@ void place_merged(TriangleMesh& mesh, const std::vector<std::vector<std::uint32_
 void snap_round(TriangleMesh& mesh, std::vector<std::uint64_t>& near, std::vector<glm::vec3>& normals,
                 std::vector<std::uint8_t>& crease, const BatchGradient& field, double T, double h,
                 const SnapOptions& options, SnapStats& st) {
-  std::vector<std::vector<std::uint32_t>> tris_of(mesh.positions.size());
-  for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t)
-    for (int c = 0; c < 3; ++c)
-      if (near[mesh.triangles[t][c]] != kFar) tris_of[mesh.triangles[t][c]].push_back(t);
+  const TrianglesOf tris_of(mesh, near, kFar);
   const std::vector<std::uint32_t> order = by_point(near);
   UnionFind uf(mesh.positions.size());
   std::vector<std::vector<std::uint32_t>> clusters;
@@ -217,23 +232,42 @@ void snap_round(TriangleMesh& mesh, std::vector<std::uint64_t>& near, std::vecto
     st.merged_vertices += cluster.size() - 1;
     clusters.push_back(std::move(cluster));
   }
+  // Nothing merged: every vertex is its own head, and the mesh stays as it is unless a triangle
+  // names a vertex twice (which the renumbering below takes away).
+  if (clusters.empty() && std::none_of(mesh.triangles.begin(), mesh.triangles.end(), [](const glm::uvec3& t) {
+        return t[0] == t[1] || t[1] == t[2] || t[2] == t[0];
+      }))
+    return;
   place_merged(mesh, clusters, normals, crease, field, T, h, options, st);
-  // Renumber: merged vertices share their head; collapsed triangles go; unused vertices go.
-  std::vector<std::uint32_t> index(mesh.positions.size(), ~0u);
+  // Renumber: merged vertices share their head, heads keep their order; collapsed triangles go.
+  const std::size_t n = mesh.positions.size();
+  std::vector<std::uint32_t> head(n), index(n);
+  std::uint32_t heads = 0;
+  for (std::uint32_t v = 0; v < n; ++v) {  // serial: find() shortens paths as it goes
+    head[v] = uf.find(v);
+    index[v] = heads;
+    heads += head[v] == v;
+  }
   TriangleMesh out;
-  std::vector<glm::vec3> out_normals;
-  std::vector<std::uint8_t> out_crease;
-  std::vector<std::uint64_t> out_near;
-  for (std::uint32_t v = 0; v < mesh.positions.size(); ++v)
-    if (uf.find(v) == v) {
-      index[v] = std::uint32_t(out.positions.size());
-      out.positions.push_back(mesh.positions[v]);
-      out_normals.push_back(normals[v]);
-      out_crease.push_back(crease[v]);
-      out_near.push_back(touched[v] == 2 ? kFar : near[v]);  // a merged vertex is done
-    }
-  for (const glm::uvec3& t : mesh.triangles) {
-    const glm::uvec3 r(index[uf.find(t[0])], index[uf.find(t[1])], index[uf.find(t[2])]);
+  out.positions.resize(heads);
+  std::vector<glm::vec3> out_normals(heads);
+  std::vector<std::uint8_t> out_crease(heads);
+  std::vector<std::uint64_t> out_near(heads);
+  tbb::parallel_for(std::size_t(0), n, [&](std::size_t v) {
+    if (head[v] != v) return;
+    const std::uint32_t k = index[v];
+    out.positions[k] = mesh.positions[v];
+    out_normals[k] = normals[v];
+    out_crease[k] = crease[v];
+    out_near[k] = touched[v] == 2 ? kFar : near[v];  // a merged vertex is done
+  });
+  std::vector<glm::uvec3> mapped(mesh.triangles.size());
+  tbb::parallel_for(std::size_t(0), mapped.size(), [&](std::size_t i) {
+    const glm::uvec3& t = mesh.triangles[i];
+    mapped[i] = {index[head[t[0]]], index[head[t[1]]], index[head[t[2]]]};
+  });
+  out.triangles.reserve(mapped.size());
+  for (const glm::uvec3& r : mapped) {
     if (r[0] == r[1] || r[1] == r[2] || r[2] == r[0]) {
       ++st.removed_triangles;
       continue;
