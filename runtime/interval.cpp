@@ -151,8 +151,14 @@ Interval field_interval(const Graph& g, NodeId n, double T, const Aabb& box, boo
   }
   switch (g.kind[n]) {
     case NodeKind::Blend: {
+      // A leaf whose support misses the box adds exactly 0 (as leaf() would find): skipped
+      // without the call, which on a blend of hundreds of primitives is most of the work.
       Interval sum;
-      for (std::size_t i = 0; i < c.size(); ++i) sum = interval::add(sum, child(i, true));
+      for (std::size_t i = 0; i < c.size(); ++i) {
+        const Family f = kind_family(g.kind[c[i]]);
+        if ((f == Family::Primitive || f == Family::Mesh) && ht::intersect(box, g.support_alone[c[i]]).empty()) continue;
+        sum = interval::add(sum, child(i, true));
+      }
       return sum;
     }
     case NodeKind::Union:
