@@ -4,6 +4,7 @@
 #include "meshers/union_find.hpp"
 
 #include <glm/common.hpp>
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
 
@@ -116,8 +117,11 @@ Pieces take_pieces(const TriangleMesh& mesh, std::vector<std::uint32_t> piece_of
   out.parts.resize(count);
   for (std::uint32_t t = 0; t < nt; ++t)
     if (piece_of[t] == ~0u) out.rest.push_back(mesh.triangles[t]);
-  std::vector<std::uint32_t> local(nv, ~0u);
-  for (std::uint32_t i = 0; i < count; ++i) {
+  // Each part numbers its vertices in the order its triangles meet them, in parallel: a thread's
+  // table of local numbers is cleared after each part it takes.
+  tbb::enumerable_thread_specific<std::vector<std::uint32_t>> locals(nv, ~0u);
+  tbb::parallel_for(std::uint32_t(0), std::uint32_t(count), [&](std::uint32_t i) {
+    std::vector<std::uint32_t>& local = locals.local();
     Submesh& sub = out.parts[i];
     for (const std::uint32_t t : of_part[i]) {
       glm::uvec3 lt;
@@ -134,7 +138,7 @@ Pieces take_pieces(const TriangleMesh& mesh, std::vector<std::uint32_t> piece_of
       sub.mesh.triangles.push_back(lt);
     }
     for (const std::uint32_t v : sub.origin) local[v] = ~0u;
-  }
+  });
   return out;
 }
 
