@@ -59,7 +59,8 @@ bool contractible(const TriangleMesh& m, const std::vector<std::uint32_t>& clust
                   std::vector<std::uint32_t>& ring, ContractScratch& scratch) {
   auto& [tris, edges, far] = scratch;
   tris.clear(), edges.clear(), far.clear();
-  for (std::uint32_t v : cluster) tris.insert(tris.end(), tris_of.list.begin() + tris_of.start[v], tris_of.list.begin() + tris_of.start[v + 1]);
+  for (std::uint32_t v : cluster)
+    tris.insert(tris.end(), tris_of.list.begin() + tris_of.start[v], tris_of.list.begin() + tris_of.start[v + 1]);
   std::sort(tris.begin(), tris.end());
   tris.erase(std::unique(tris.begin(), tris.end()), tris.end());
   auto in = [&](std::uint32_t v) { return std::binary_search(cluster.begin(), cluster.end(), v); };

@@ -196,7 +196,6 @@ namespace {
 struct Span {
   glm::dvec3 a, b, c, d;
   glm::dvec3 at(double t) const { return a + t * (b + t * (c + t * d)); }
-  glm::dvec3 velocity(double t) const { return b + t * (2.0 * c + 3.0 * t * d); }
   glm::dvec3 bend(double t) const { return 2.0 * c + 6.0 * t * d; }  // C''
 };
 
