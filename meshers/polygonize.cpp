@@ -4,6 +4,7 @@
 #include "meshers/polygonize.hpp"
 
 #include "meshers/brick_extract.hpp"
+#include "meshers/batch_field.hpp"
 #include "meshers/brick_join.hpp"
 #include "meshers/features.hpp"
 #include "meshers/piece_cache.hpp"
@@ -154,10 +155,7 @@ void snap_phase(const Grid& grid, const std::vector<EdgeVertex>& all, const Feat
   }
   if (count == 0) return;
   const SnapOptions options{features.sharp_angle_degrees, features.max_error};
-  const BatchGradient on_bricks = [&field](std::span<const glm::dvec3> p, std::span<double> v, std::span<glm::dvec3> g) {
-    field.gradient(p, v, g);
-  };
-  snap_to_grid_points(mesh, near, normals, snapped, on_bricks, field.threshold(), grid.h, options, &stats.snap);
+  snap_to_grid_points(mesh, near, normals, snapped, gradient_of(field), field.threshold(), grid.h, options, &stats.snap);
 }
 
 // Folds left by the crease step or the quality pass: collapsed (meshers/unfold.hpp), and where
