@@ -72,7 +72,8 @@ Guess first_guess(const float* own, int a, int b, double T) {
 
 }  // namespace
 
-void march(const Grid& grid, glm::ivec3 b, const std::uint8_t* label, Scratch& sc, BrickOutput& out) {
+void march(const Grid& grid, glm::ivec3 b, const std::uint8_t* label, Scratch& sc, BrickOutput& out,
+           const std::uint8_t* cells) {
   const glm::i64vec3 base = glm::i64vec3(b) * std::int64_t(kCells);
   sc.keys.clear();
   sc.ends.clear();
@@ -95,7 +96,7 @@ void march(const Grid& grid, glm::ivec3 b, const std::uint8_t* label, Scratch& s
           corner[c] = {cx + (c & 1), cy + ((c >> 1) & 1), cz + ((c >> 2) & 1)};
           mask |= label[local_index(corner[c])] << c;
         }
-        if (mask == 0 || mask == 255) continue;
+        if (mask == 0 || mask == 255 || (cells && !cells[cx + kCells * (cy + kCells * cz)])) continue;
         for (const auto& tet : kTets) {
           int in[4], out_[4], ni = 0, no = 0;
           for (int v : tet) (label[local_index(corner[v])] ? in[ni++] : out_[no++]) = v;

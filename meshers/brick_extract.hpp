@@ -97,8 +97,10 @@ struct Refine {
 
 /// The triangles of brick `b` (keys of their vertices' edges, oriented outward) from the
 /// inside labels of its kPoints^3 grid points (x fastest); fills out.triangles and, in
-/// scratch, the edges met and each cell's first triangle.
-void march(const Grid& grid, glm::ivec3 b, const std::uint8_t* label, Scratch& scratch, BrickOutput& out);
+/// scratch, the edges met and each cell's first triangle. When `cells` is given (kCells^3
+/// flags, x fastest), a cell whose flag is 0 gets no triangles.
+void march(const Grid& grid, glm::ivec3 b, const std::uint8_t* label, Scratch& scratch, BrickOutput& out,
+           const std::uint8_t* cells = nullptr);
 
 /// One vertex per distinct edge of march(): false position along the edge on `eval` (the
 /// brick's tape) from the brick's samples `own`, threshold T; fills out.vertices, sorted by key.

@@ -205,7 +205,7 @@ TriangleMesh blend_patch(const LocalInput& in, const BlendFields& bf, const std:
       if (deep) deep_octants.add(octant);
     }
     return mask;
-  }, st, false);  // a blend is smooth where operands meet
+  }, st, false, c);  // a blend is smooth where operands meet; only where two act is kept
   const BatchField cut = bf.cut(c.size());
   TriangleMesh side = pull_back_boundary(cut_mesh(p, deep_octants.cut_values(p, cut, eps), cut, cut_options(in)));
   relax_boundary(side, field, T);

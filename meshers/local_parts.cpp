@@ -99,8 +99,9 @@ double patch_precision(const LocalInput& in, const Aabb& box) {
 
 // The surface of the node itself, polygonized only inside `clip`, in the bricks `wanted` accepts.
 TriangleMesh patch(const LocalInput& in, const Aabb& clip, std::function<std::uint8_t(const Aabb&)> wanted,
-                   LocalStats& st, bool sharp) {
+                   LocalStats& st, bool sharp, std::span<const NodeId> operands) {
   PolygonizeOptions o = in.polygonize;
+  o.region_operands.assign(operands.begin(), operands.end());
   o.sharp_features = o.sharp_features && sharp;
   o.precision = patch_precision(in, clip);
   st.patch_precision = o.precision;

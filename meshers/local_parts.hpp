@@ -77,8 +77,10 @@ void flip(TriangleMesh& m);
 bool overlaps(const Aabb& a, const Aabb& b);
 /// The node's own surface, polygonized only inside `clip`, in the bricks `wanted` accepts, at
 /// the operands' edge length there (at most 2x finer than h), sharp features only if `sharp`.
+/// `operands`, when not empty, are the blend's (PolygonizeOptions::region_operands): only cells
+/// where two of them act are meshed.
 TriangleMesh patch(const LocalInput& in, const Aabb& clip, std::function<std::uint8_t(const Aabb&)> wanted,
-                   LocalStats& st, bool sharp);
+                   LocalStats& st, bool sharp, std::span<const NodeId> operands = {});
 /// The octants of `brick` (octants::of) on which `acts`, given an octant's box widened by
 /// `margin`, may be true; none when it may not be on the whole brick widened so. A patch's
 /// filter: the interval bounds it rests on loosen with the box.

@@ -6,6 +6,7 @@
 #include "meshers/brick_extract.hpp"
 #include "meshers/batch_field.hpp"
 #include "meshers/brick_join.hpp"
+#include "meshers/brick_region.hpp"
 #include "meshers/features.hpp"
 #include "meshers/piece_cache.hpp"
 #include "meshers/polygonize_reuse.hpp"
@@ -98,7 +99,7 @@ struct BlockTapes {
 };
 
 BlockTapes block_tapes(const std::shared_ptr<const Graph>& graph, NodeId root, double T, const Grid& grid,
-                       const std::vector<std::uint32_t>& active) {
+                       const std::vector<std::uint32_t>& active, bool under_blend = false) {
   const glm::ivec3 blocks = (grid.bricks + (kTapeBlock - 1)) / kTapeBlock;
   auto key = [&](std::uint32_t brick) {
     const glm::ivec3 c = grid.brick_at(brick) / kTapeBlock;
@@ -119,7 +120,7 @@ BlockTapes block_tapes(const std::shared_ptr<const Graph>& graph, NodeId root, d
     const glm::ivec3 c(int(k % std::uint64_t(blocks.x)), int(k / std::uint64_t(blocks.x) % std::uint64_t(blocks.y)),
                        int(k / (std::uint64_t(blocks.x) * std::uint64_t(blocks.y))));
     const Aabb box = grid.box(c * kTapeBlock, glm::min(c * kTapeBlock + kTapeBlock, grid.bricks));
-    out.tapes[i] = std::make_shared<const Tape>(compile_tape(graph, root, T, &box));
+    out.tapes[i] = std::make_shared<const Tape>(compile_tape(graph, root, T, &box, under_blend));
   });
   return out;
 }
@@ -377,6 +378,17 @@ TriangleMesh polygonize(std::shared_ptr<const Graph> graph, NodeId root, double 
     const glm::ivec3 b = grid.brick_at(active[a]);
     tapes[a] = std::make_shared<const Tape>(narrow_tape(*blocks.tapes[blocks.of[a]], grid.box(b, b + 1)));
   });
+  // A blend's patch: each brick's operand tapes, operand-major per brick, and the region values.
+  const std::size_t operands = options.brick_filter ? options.region_operands.size() : 0;
+  std::vector<std::shared_ptr<const Tape>> operand_tapes(operands * active.size());
+  std::vector<float> region(operands ? active.size() * kBrickPoints : 0);
+  for (std::size_t o = 0; o < operands; ++o) {
+    const BlockTapes ob = block_tapes(graph, options.region_operands[o], T, grid, active, true);
+    tbb::parallel_for(std::size_t(0), active.size(), [&](std::size_t a) {
+      const glm::ivec3 b = grid.brick_at(active[a]);
+      operand_tapes[a * operands + o] = std::make_shared<const Tape>(narrow_tape(*ob.tapes[ob.of[a]], grid.box(b, b + 1)));
+    });
+  }
   // Bricks extracted by an earlier run with the same key (meshers/polygonize_reuse.hpp) are
   // neither sampled nor extracted; their neighbours sample the points they own with their tapes.
   brick::BrickView view{&grid, &state, &slot, {}};
@@ -408,6 +420,7 @@ TriangleMesh polygonize(std::shared_ptr<const Graph> graph, NodeId root, double 
           if (sampled_owner(b, {i, j, k}, at) != owner) continue;
           if (!(wanted[a] & brick::octants_at(i, j, k))) {
             values[a * kBrickPoints + std::size_t(n)] = skipped;
+            if (operands) region[a * kBrickPoints + std::size_t(n)] = skipped;
             continue;
           }
           const glm::dvec3 p = grid.position(glm::i64vec3(b) * std::int64_t(kCells) + glm::i64vec3(i, j, k));
@@ -417,8 +430,18 @@ TriangleMesh polygonize(std::shared_ptr<const Graph> graph, NodeId root, double 
           zs[m] = static_cast<float>(p.z);
           ++m;
         }
-    for (int at = 0; at < m; at += kBlock) eval.field_block(xs + at, ys + at, zs + at, std::min(kBlock, m - at), fs + at);
+    float gs[kBrickPoints];
+    for (int at = 0; at < m; at += kBlock) {
+      const int count = std::min(kBlock, m - at);
+      if (operands)  // (no kept neighbours with a filter: `eval` is a's own tape)
+        brick::sum_operands(std::span(operand_tapes).subspan(a * operands, operands), xs + at, ys + at, zs + at, count,
+                            fs + at, gs + at);
+      else
+        eval.field_block(xs + at, ys + at, zs + at, count, fs + at);
+    }
     for (int q = 0; q < m; ++q) values[a * kBrickPoints + which[q]] = fs[q];
+    if (operands)
+      for (int q = 0; q < m; ++q) region[a * kBrickPoints + which[q]] = gs[q];
     return std::size_t(m);
   };
   tbb::parallel_for(std::size_t(0), active.size(), [&](std::size_t a) {
@@ -446,8 +469,10 @@ TriangleMesh polygonize(std::shared_ptr<const Graph> graph, NodeId root, double 
           if (i < kCells && j < kCells && k < kCells) continue;
           std::size_t at = 0;
           const std::uint32_t s = sampled_owner(b, {i, j, k}, at);
-          if (s != kNone && !kept[s])
-            values[a * kBrickPoints + std::size_t(i + kPoints * (j + kPoints * k))] = values[std::size_t(s) * kBrickPoints + at];
+          if (s == kNone || kept[s]) continue;
+          const std::size_t here = a * kBrickPoints + std::size_t(i + kPoints * (j + kPoints * k));
+          values[here] = values[std::size_t(s) * kBrickPoints + at];
+          if (operands) region[here] = region[std::size_t(s) * kBrickPoints + at];
         }
   });
   stats.points_evaluated = evaluated.load();
@@ -495,7 +520,9 @@ TriangleMesh polygonize(std::shared_ptr<const Graph> graph, NodeId root, double 
     if (boundary) reaches_boundary = true;
     BrickOutput& out = outputs[a];
     brick::Scratch& sc = scratch.local();
-    brick::march(grid, b, label, sc, out);
+    std::uint8_t keep_cells[kCells * kCells * kCells];
+    if (operands) brick::region_cells(region.data() + a * kBrickPoints, keep_cells);
+    brick::march(grid, b, label, sc, out, operands ? keep_cells : nullptr);
     const TapeEvaluator eval(tapes[a]);
     refined += brick::place_vertices(grid, b, active[a], own, label, eval, T,
                                      {options.refine_steps, options.refine_tolerance}, sc, out);

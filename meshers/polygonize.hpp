@@ -30,6 +30,7 @@
 #include <functional>
 #include <memory>
 #include <stdexcept>
+#include <vector>
 
 namespace ht {
 
@@ -62,6 +63,11 @@ struct PolygonizeOptions {
   /// points outside the named octants are not evaluated, and the triangles of their cells and of
   /// the cells that read them are left out (so a patch is also open within a cell of them).
   std::function<std::uint8_t(const Aabb&)> brick_filter;
+  /// With brick_filter, for a blend's patch: the root is a blend of these nodes (its field their
+  /// sum, each taken as a blend's operand), sampled one by one; a cell with no corner where two
+  /// of them act (are nonzero) is not meshed: the patch's cut would take its triangles away
+  /// (meshers/local_blends.cpp, meshers/brick_region.hpp). Vertices are placed on the root's field.
+  std::vector<NodeId> region_operands;
   /// When not empty, only the part of the domain inside this box is gridded (with the filter, a
   /// patch costs what its region costs, not what the node's whole solid would).
   Aabb clip;

@@ -19,6 +19,7 @@
 #include <atomic>
 #include <bit>
 #include <cmath>
+#include <map>
 #include <mutex>
 #include <numbers>
 #include <set>
@@ -358,4 +359,65 @@ TEST(Polygonize, LeavingOutOneSidedOctantsChangesNoTriangle) {
   }
   EXPECT_GT(triangles, 10000u);
   EXPECT_GT(left_out, 100u);  // octants of active bricks left out: the filter did work
+}
+
+// A blend's patch sampled operand by operand (PolygonizeOptions::region_operands) leaves out
+// only triangles far from where two operands act: every triangle of the unfiltered run with a
+// corner where the operands' |f| but the largest reach eps is there too (the same place), and
+// the filter leaves out a good part of the rest.
+TEST(Polygonize, ARegionFilterKeepsEveryTriangleWhereTwoOperandsAct) {
+  test::Rng rng(65);
+  const double h = 0.05, eps = 1e-3 * kT;
+  std::size_t needed = 0, whole_count = 0, part_count = 0;
+  for (int trial = 0; trial < 10; ++trial) {
+    Builder b(kT);
+    const NodeId first = test::random_tree(b, rng, {});
+    const NodeId second = b.segment({-1, 0, 0}, {1, 0.2, 0}, {0.5});
+    const Tree t = b.build(b.blend({first, second}));
+    const auto ops = t.graph().children_of(t.root());
+    PolygonizeOptions o = bare_extraction(h);
+    o.brick_filter = [](const Aabb&) { return octants::kAll; };
+    const TriangleMesh whole = polygonize(t.graph_ptr(), t.root(), kT, o);
+    o.region_operands.assign(ops.begin(), ops.end());
+    const TriangleMesh part = polygonize(t.graph_ptr(), t.root(), kT, o);
+    whole_count += whole.triangles.size();
+    part_count += part.triangles.size();
+    // The operands' |f| but the largest at the unfiltered run's vertices.
+    std::vector<double> region(whole.positions.size(), 0.0), largest(whole.positions.size(), 0.0);
+    for (NodeId op : ops) {
+      const TapeEvaluator eval(std::make_shared<const Tape>(compile_tape(t.graph_ptr(), op, kT, nullptr, true)));
+      std::vector<double> f(whole.positions.size());
+      eval.field(whole.positions, f);
+      for (std::size_t v = 0; v < f.size(); ++v) region[v] += std::abs(f[v]), largest[v] = std::max(largest[v], std::abs(f[v]));
+    }
+    // The filtered run's triangles by centroid, in buckets a quarter cell wide.
+    auto bucket = [&](const dvec3& c) {
+      const glm::i64vec3 q(glm::floor(c / (0.25 * h)));
+      return std::tuple(q.x, q.y, q.z);
+    };
+    std::set<std::tuple<std::int64_t, std::int64_t, std::int64_t>> filled;
+    std::vector<dvec3> centroids;
+    auto centroid = [](const TriangleMesh& m, const glm::uvec3& tri) {
+      return (m.positions[tri[0]] + m.positions[tri[1]] + m.positions[tri[2]]) / 3.0;
+    };
+    std::multimap<std::tuple<std::int64_t, std::int64_t, std::int64_t>, dvec3> at;
+    for (const glm::uvec3& tri : part.triangles) at.emplace(bucket(centroid(part, tri)), centroid(part, tri));
+    for (const glm::uvec3& tri : whole.triangles) {
+      if (!(std::max({region[tri[0]] - largest[tri[0]], region[tri[1]] - largest[tri[1]], region[tri[2]] - largest[tri[2]]}) >= eps))
+        continue;
+      ++needed;
+      const dvec3 c = centroid(whole, tri);
+      const auto [x, y, z] = bucket(c);
+      bool found = false;
+      for (std::int64_t dx = -1; dx <= 1 && !found; ++dx)
+        for (std::int64_t dy = -1; dy <= 1 && !found; ++dy)
+          for (std::int64_t dz = -1; dz <= 1 && !found; ++dz) {
+            const auto [lo, hi] = at.equal_range(std::tuple(x + dx, y + dy, z + dz));
+            for (auto it = lo; it != hi && !found; ++it) found = glm::length(it->second - c) < 1e-3 * h;
+          }
+      ASSERT_TRUE(found) << "trial " << trial << ": a triangle where two operands act went, at " << c.x << " " << c.y << " " << c.z;
+    }
+  }
+  EXPECT_GT(needed, 2000u);                   // the region was met
+  EXPECT_LT(part_count, whole_count * 9 / 10);  // and the filter left out triangles away from it
 }
