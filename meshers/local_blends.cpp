@@ -207,7 +207,7 @@ TriangleMesh blend_patch(const LocalInput& in, const BlendFields& bf, const std:
     return mask;
   }, st, false, c);  // a blend is smooth where operands meet; only where two act is kept
   const BatchField cut = bf.cut(c.size());
-  TriangleMesh side = pull_back_boundary(cut_mesh(p, deep_octants.cut_values(p, cut, eps), cut, cut_options(in)));
+  TriangleMesh side = pull_back_boundary(cut_mesh(p, deep_octants.cut_values(p, cut, eps), cut, rim_cut_options()));
   relax_boundary(side, field, T);
   st.patch_triangles = side.triangles.size();
   return side;

@@ -20,6 +20,13 @@ CutOptions cut_options(const LocalInput& in) {
   return o;
 }
 
+CutOptions rim_cut_options() {
+  CutOptions o;
+  o.snap = 0.0;
+  o.refine_steps = 0;
+  return o;
+}
+
 const TriangleMesh& operand(const LocalInput& in, std::size_t i) {
   if (i >= in.child_meshes.size() || !in.child_meshes[i])
     throw LocalFailure("operand " + std::to_string(i) + " has no mesh");

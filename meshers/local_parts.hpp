@@ -52,6 +52,12 @@ class NodeField {
 
 /// Cuts snap vertices by at most a tenth of the precision (see CutOptions::snap_distance).
 CutOptions cut_options(const LocalInput& in);
+/// For a blend patch's cut whose rim is then pulled back (meshers/bridge.hpp pull_back_boundary):
+/// every triangle touching the cut goes, so where the new vertices sit on the crossing edges does
+/// not matter and no roots are sought; nothing snaps (a snapped vertex would only lose its fan to
+/// the pull-back as well). Not for a local blend's patch: there the snapped fans keep the bands
+/// narrower than their limit on tests/test_local_ops.cpp's bunny on a perch.
+CutOptions rim_cut_options();
 /// Child i's mesh; throws LocalFailure when it has none.
 const TriangleMesh& operand(const LocalInput& in, std::size_t i);
 /// Rings of triangles around a cut's seam that its refinement covers.
