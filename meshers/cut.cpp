@@ -1,7 +1,5 @@
 #include "meshers/cut.hpp"
 
-#include "meshers/edges.hpp"
-
 #include <glm/geometric.hpp>
 
 #include <algorithm>
@@ -147,18 +145,34 @@ double min_angle_cos(const glm::dvec3& a, const glm::dvec3& b, const glm::dvec3&
   return std::max({cosine(a, b, c), cosine(b, c, a), cosine(c, a, b)});
 }
 
-// The vertices of `m` with more than one outgoing boundary edge (where the kept part pinches).
-std::vector<std::uint32_t> pinched(const TriangleMesh& m) {
-  std::vector<std::uint8_t> out(m.positions.size(), 0);
+// The vertices of `snapped` (of `m`: vertices moved onto the cut) with more than one outgoing
+// boundary edge, where the kept part pinches. Only they can: the roots lie on one crossing edge
+// each, and a vertex off the cut has no boundary edge from the cut. Reads their fans alone (both
+// triangles of an edge from one are in them), not the whole mesh.
+std::vector<std::uint32_t> pinched(const TriangleMesh& m, std::span<const std::uint32_t> snapped) {
+  if (snapped.empty()) return {};
+  std::vector<std::uint8_t> count(m.positions.size(), 0), mark(m.positions.size(), 0);
+  for (std::uint32_t v : snapped) mark[v] = 1;
+  auto key = [](std::uint32_t a, std::uint32_t b) { return std::uint64_t(a) << 32 | b; };
+  std::vector<std::uint64_t> sides;
+  for (const glm::uvec3& t : m.triangles)
+    if (mark[t[0]] || mark[t[1]] || mark[t[2]])
+      for (int k = 0; k < 3; ++k) sides.push_back(key(t[k], t[(k + 1) % 3]));
+  std::sort(sides.begin(), sides.end());
   std::vector<std::uint32_t> bad;
-  for (const BoundaryEdge& e : boundary_edges(m))
-    if (++out[e.from] == 2) bad.push_back(e.from);
+  for (const std::uint64_t k : sides) {
+    const std::uint32_t from = std::uint32_t(k >> 32), to = std::uint32_t(k);
+    if (mark[from] && !std::binary_search(sides.begin(), sides.end(), key(to, from)) && ++count[from] == 2)
+      bad.push_back(from);
+  }
   return bad;
 }
 
+// `source`: each output vertex's input vertex (~0u for a root); `snapped`: the output vertices
+// moved onto the cut.
 TriangleMesh cut_once(const TriangleMesh& mesh, std::span<const double> cv, const BatchField& c,
                       const CutOptions& options, const std::vector<std::uint8_t>& no_snap, CutStats& s,
-                      std::vector<std::uint32_t>& source);
+                      std::vector<std::uint32_t>& source, std::vector<std::uint32_t>& snapped);
 
 }  // namespace
 
@@ -176,9 +190,9 @@ TriangleMesh cut_mesh(const TriangleMesh& mesh, std::span<const double> cv, cons
   std::size_t evaluations = 0;
   for (int attempt = 0;; ++attempt) {
     CutStats s;
-    std::vector<std::uint32_t> source;
-    TriangleMesh out = cut_once(mesh, cv, c, options, no_snap, s, source);
-    const auto bad = pinched(out);
+    std::vector<std::uint32_t> source, snapped;
+    TriangleMesh out = cut_once(mesh, cv, c, options, no_snap, s, source, snapped);
+    const auto bad = pinched(out, snapped);
     bool retry = false;
     for (std::uint32_t v : bad)
       if (source[v] != ~0u && !no_snap[source[v]]) no_snap[source[v]] = 1, retry = true;
@@ -195,7 +209,7 @@ namespace {
 
 TriangleMesh cut_once(const TriangleMesh& mesh, std::span<const double> cv, const BatchField& c,
                       const CutOptions& options, const std::vector<std::uint8_t>& no_snap, CutStats& s,
-                      std::vector<std::uint32_t>& source) {
+                      std::vector<std::uint32_t>& source, std::vector<std::uint32_t>& snapped) {
   std::vector<glm::dvec3> pos = mesh.positions;
   std::vector<std::int8_t> side(pos.size());
   for (std::size_t v = 0; v < pos.size(); ++v) side[v] = cv[v] < 0 ? -1 : 1;
@@ -253,6 +267,7 @@ TriangleMesh cut_once(const TriangleMesh& mesh, std::span<const double> cv, cons
       index[v] = std::uint32_t(out.positions.size());
       out.positions.push_back(position(v));
       source.push_back(v < pos.size() ? v : ~0u);
+      if (v < pos.size() && side[v] == 0) snapped.push_back(index[v]);
       if (v >= pos.size()) ++s.new_vertices;
       else ++s.kept_vertices;
     }
