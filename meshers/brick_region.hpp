@@ -1,6 +1,6 @@
 // A blend's patch sampled operand by operand (PolygonizeOptions::region_operands): the
 // polygonizer learns, at every grid point of a brick, whether two operands act there, and
-// meshes only the cells near where they do. Internal to the polygonizer (meshers/polygonize.cpp),
+// meshes only the cells with a corner where they do. Internal to the polygonizer (meshers/polygonize.cpp),
 // beside the per-brick extraction of meshers/brick_extract.hpp.
 #pragma once
 
@@ -15,7 +15,7 @@ namespace ht::brick {
 
 /// Samples the operands' tapes (`operands`, one per operand, in the blend's order) at n <= kBlock
 /// points: value[i] gets their sum, the blend's field (summed in operand order), and region[i]
-/// the sum of their |f| but the largest, which is large where two operands act at once.
+/// the sum of their |f| but the largest, positive exactly where two operands act at once.
 void sum_operands(std::span<const std::shared_ptr<const Tape>> operands, const float* xs, const float* ys,
                   const float* zs, int n, float* value, float* region);
 

@@ -53,8 +53,12 @@ std::vector<Side> sides_by_edge(std::size_t vertices, std::span<const glm::uvec3
   });
   // Filed in triangle order, so a stable sort by the upper vertex leaves (tri, corner) in order.
   tbb::parallel_for(std::size_t(0), vertices, [&](std::size_t v) {
-    for (std::uint32_t i = first[v] + 1; i < first[v + 1]; ++i)  // insertion sort: a few sides each
-      for (std::uint32_t j = i; j > first[v] && sides[j - 1].hi > sides[j].hi; --j) std::swap(sides[j - 1], sides[j]);
+    for (std::uint32_t i = first[v] + 1; i < first[v + 1]; ++i) {  // insertion sort: a few sides each
+      const Side x = sides[i];
+      std::uint32_t j = i;
+      for (; j > first[v] && sides[j - 1].hi > x.hi; --j) sides[j] = sides[j - 1];
+      sides[j] = x;
+    }
   });
   return sides;
 }

@@ -330,7 +330,11 @@ TriangleMesh polygonize(std::shared_ptr<const Graph> graph, NodeId root, double 
       if (mask[c]) active.push_back(candidates[c]), wanted.push_back(mask[c]);
   }
   stats.bricks_active = active.size();
-  const MemoryReservation working(budget, double(active.size()) * 12288.0,
+  // A blend's patch samples its operands one by one and keeps a region value a grid point
+  // (PolygonizeOptions::region_operands, meshers/brick_region.hpp).
+  const std::size_t operands =
+      options.brick_filter && options.region_operands.size() >= 2 ? options.region_operands.size() : 0;
+  const MemoryReservation working(budget, double(active.size()) * (12288.0 + (operands ? 4.0 * kBrickPoints : 0.0)),
                                   "precision " + std::to_string(h) + ": the " + std::to_string(active.size()) +
                                       " bricks the surface crosses");
   std::vector<std::uint32_t> slot(grid.brick_count(), kNone);
@@ -378,8 +382,7 @@ TriangleMesh polygonize(std::shared_ptr<const Graph> graph, NodeId root, double 
     const glm::ivec3 b = grid.brick_at(active[a]);
     tapes[a] = std::make_shared<const Tape>(narrow_tape(*blocks.tapes[blocks.of[a]], grid.box(b, b + 1)));
   });
-  // A blend's patch: each brick's operand tapes, operand-major per brick, and the region values.
-  const std::size_t operands = options.brick_filter ? options.region_operands.size() : 0;
+  // A blend's patch: each brick's operand tapes (a brick's consecutive), and the region values.
   std::vector<std::shared_ptr<const Tape>> operand_tapes(operands * active.size());
   std::vector<float> region(operands ? active.size() * kBrickPoints : 0);
   for (std::size_t o = 0; o < operands; ++o) {

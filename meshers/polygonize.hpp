@@ -41,9 +41,9 @@ struct PolygonizeOptions {
   std::size_t memory_budget = std::size_t(4) << 30;  ///< bytes the polygonizer may use (when `budget` is null)
   /// The run's budget, shared with its other stages (runtime/memory_budget.hpp); not owned. When
   /// set it replaces memory_budget. The polygonizer takes its brick table and active bricks
-  /// (5 bytes a brick, 12 KiB an active brick) and its quality pass (kQualityBytesPerVertex)
-  /// before allocating them, gives them back when done, and throws MemoryBudgetError when they
-  /// do not fit.
+  /// (5 bytes a brick, 12 KiB an active brick, 15 with region_operands) and its quality pass
+  /// (kQualityBytesPerVertex) before allocating them, gives them back when done, and throws
+  /// MemoryBudgetError when they do not fit.
   MemoryBudget* budget = nullptr;
   int refine_steps = 24;                         ///< at most this many false-position steps per vertex (Illinois)
   /// A vertex is done when |f - T| is below this fraction of f's change along its edge, or its
@@ -66,7 +66,8 @@ struct PolygonizeOptions {
   /// With brick_filter, for a blend's patch: the root is a blend of these nodes (its field their
   /// sum, each taken as a blend's operand), sampled one by one; a cell with no corner where two
   /// of them act (are nonzero) is not meshed: the patch's cut would take its triangles away
-  /// (meshers/local_blends.cpp, meshers/brick_region.hpp). Vertices are placed on the root's field.
+  /// (meshers/local_blends.cpp, meshers/brick_region.hpp). Vertices are placed on the root's
+  /// field. Fewer than two operands: ignored.
   std::vector<NodeId> region_operands;
   /// When not empty, only the part of the domain inside this box is gridded (with the filter, a
   /// patch costs what its region costs, not what the node's whole solid would).
