@@ -219,7 +219,7 @@ std::vector<std::uint8_t> rings_around(const TriangleMesh& mesh, std::span<const
 }
 
 void newton_onto(std::vector<glm::dvec3>& at, const BatchGradient& field, double T, int steps,
-                 std::span<const double> settled) {
+                 std::span<const double> settled, std::span<glm::dvec3> last_gradient) {
   std::vector<std::uint32_t> who(at.size());
   std::iota(who.begin(), who.end(), 0u);
   std::vector<glm::dvec3> pts, grad;
@@ -230,6 +230,7 @@ void newton_onto(std::vector<glm::dvec3>& at, const BatchGradient& field, double
     field(pts, value, grad);
     std::size_t kept = 0;
     for (std::size_t k = 0; k < who.size(); ++k) {
+      if (!last_gradient.empty()) last_gradient[who[k]] = grad[k];
       const double g2 = glm::dot(grad[k], grad[k]);
       if (!(g2 > 0 && std::isfinite(g2))) continue;
       const double step = (value[k] - T) / g2;
@@ -251,7 +252,9 @@ void relax_vertices(TriangleMesh& mesh, std::span<const std::uint8_t> movable, c
   std::vector<double> settled(moving.size());
   for (int it = 0; it < o.iterations; ++it) {
     for (std::size_t i = 0; i < moving.size(); ++i) at[i] = mesh.positions[moving[i]];
-    field(at, {}, grad);
+    // The tangent planes: after the first round, the gradients where the last Newton steps began
+    // (a settled step's length from the point) stand in for a field call of their own.
+    if (it == 0) field(at, {}, grad);
     for (std::size_t i = 0; i < moving.size(); ++i) {
       glm::dvec3 c(0.0);
       double ring = 0.0;
@@ -266,7 +269,7 @@ void relax_vertices(TriangleMesh& mesh, std::span<const std::uint8_t> movable, c
       at[i] += d;
     }
     // Newton steps until a point's step is under kSettled of its ring's mean edge.
-    newton_onto(at, field, T, o.newton_steps, settled);
+    newton_onto(at, field, T, o.newton_steps, settled, grad);
     for (std::size_t i = 0; i < moving.size(); ++i) mesh.positions[moving[i]] = at[i];
   }
 }

@@ -31,9 +31,10 @@ void relax_vertices(TriangleMesh& mesh, std::span<const std::uint8_t> movable, c
 
 /// Newton steps onto {f = T} along the gradient, at most `steps`: a point whose step was no longer
 /// than settled[i] (world units) takes no more, the next being about the curvature times that
-/// step squared.
+/// step squared. `last_gradient`, when given (at.size() entries), receives each point's gradient
+/// where its last step began (within that short step of where it ends).
 void newton_onto(std::vector<glm::dvec3>& at, const BatchGradient& field, double threshold, int steps,
-                 std::span<const double> settled);
+                 std::span<const double> settled, std::span<glm::dvec3> last_gradient = {});
 
 /// Straightens every boundary loop of `mesh`: each loop vertex moves halfway toward the midpoint
 /// of its two loop neighbours, then back onto {f = T}; the vertices one ring inside follow by
