@@ -382,7 +382,7 @@ TriangleMesh polygonize(std::shared_ptr<const Graph> graph, NodeId root, double 
     const glm::ivec3 b = grid.brick_at(active[a]);
     tapes[a] = std::make_shared<const Tape>(narrow_tape(*blocks.tapes[blocks.of[a]], grid.box(b, b + 1)));
   });
-  // A blend's patch: each brick's operand tapes (a brick's consecutive), and the region values.
+  // A blend's patch: each brick's operand tapes (a brick's side by side), and the region values.
   std::vector<std::shared_ptr<const Tape>> operand_tapes(operands * active.size());
   std::vector<float> region(operands ? active.size() * kBrickPoints : 0);
   for (std::size_t o = 0; o < operands; ++o) {
