@@ -395,8 +395,6 @@ TEST(Polygonize, ARegionFilterKeepsEveryTriangleWhereTwoOperandsAct) {
       const glm::i64vec3 q(glm::floor(c / (0.25 * h)));
       return std::tuple(q.x, q.y, q.z);
     };
-    std::set<std::tuple<std::int64_t, std::int64_t, std::int64_t>> filled;
-    std::vector<dvec3> centroids;
     auto centroid = [](const TriangleMesh& m, const glm::uvec3& tri) {
       return (m.positions[tri[0]] + m.positions[tri[1]] + m.positions[tri[2]]) / 3.0;
     };
