@@ -1,6 +1,7 @@
 #include "meshers/caps.hpp"
 
 #include "meshers/bridge.hpp"
+#include "meshers/halfedge_ops.hpp"
 #include "nodes/trimesh.hpp"
 
 #include <glm/geometric.hpp>
@@ -133,7 +134,8 @@ std::size_t delaunay_flips(const std::vector<glm::dvec2>& q, std::vector<std::ar
 // in the cap's plane): split edges longer than 4/3 target, collapse those shorter than 4/5 into
 // an interior end, flip to Delaunay, move interior vertices to their neighbours' centroid. The
 // boundary (shared with the cut mesh) never changes. Halfedge work on an OpenMesh mesh of the
-// cap, with its is_collapse_ok / is_flip_ok checks. Points are appended to q; t is replaced.
+// cap, with OpenMesh's collapse and flip checks (meshers/halfedge_ops.hpp). Points are appended
+// to q; t is replaced.
 class CapRemesher {
  public:
   CapRemesher(const std::vector<glm::dvec2>& q, const std::vector<std::array<std::uint32_t, 3>>& t) {
@@ -190,11 +192,11 @@ class CapRemesher {
       for (int side = 0; side < 2; ++side) {
         const auto h = m_.halfedge_handle(e, side);  // collapse from -> to
         const auto from = m_.from_vertex_handle(h), to = m_.to_vertex_handle(h);
-        if (m_.is_boundary(from) || !m_.is_collapse_ok(h)) continue;
+        if (m_.is_boundary(from) || !ht::collapse_ok(m_, h)) continue;
         bool too_long = false;
         for (const auto w : m_.vv_range(from)) too_long |= glm::length(xy(w) - xy(to)) > longer;
         if (too_long || !keeps_orientation(from, to)) continue;
-        m_.collapse(h);
+        ht::collapse(m_, h);
         break;
       }
     }
@@ -230,14 +232,14 @@ class CapRemesher {
     for (int round = 0; round < 16; ++round) {
       std::size_t done = 0;
       for (const auto e : m_.edges()) {
-        if (m_.status(e).deleted() || m_.is_boundary(e) || opposite_angles(e) <= 3.14159265358979 + 1e-9 || !m_.is_flip_ok(e))
+        if (m_.status(e).deleted() || m_.is_boundary(e) || opposite_angles(e) <= 3.14159265358979 + 1e-9 || !ht::flip_ok(m_, e))
           continue;
         const auto h = m_.halfedge_handle(e, 0);
         const auto a = m_.from_vertex_handle(h), b = m_.to_vertex_handle(h);
         const auto r = m_.to_vertex_handle(m_.next_halfedge_handle(h));
         const auto s = m_.to_vertex_handle(m_.next_halfedge_handle(m_.opposite_halfedge_handle(h)));
         if (cross2(xy(r), xy(s), xy(b)) <= 0 || cross2(xy(s), xy(r), xy(a)) <= 0) continue;  // not a convex quad
-        m_.flip(e);
+        ht::flip(m_, e);
         ++done;
       }
       flips_ += done;

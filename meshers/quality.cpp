@@ -1,6 +1,7 @@
 #include "meshers/quality.hpp"
 #include "meshers/quality_whole.hpp"
 
+#include "meshers/halfedge_ops.hpp"
 #include "meshers/relax.hpp"
 #include "meshers/submesh.hpp"
 #include "meshers/triangle_shape.hpp"
@@ -207,8 +208,8 @@ class Improver {
       const VH a = m_.from_vertex_handle(h), b = m_.to_vertex_handle(h);
       if (!on_crease(a) || !on_crease(b)) continue;
       for (const HH x : {h, m_.opposite_halfedge_handle(h)}) {
-        if (m_.is_boundary(m_.from_vertex_handle(x)) || !m_.is_collapse_ok(x) || !keeps_faces(x)) continue;
-        m_.collapse(x);
+        if (m_.is_boundary(m_.from_vertex_handle(x)) || !ht::collapse_ok(m_, x) || !keeps_faces(x)) continue;
+        ht::collapse(m_, x);
         ++done;
         break;
       }
@@ -265,10 +266,10 @@ class Improver {
         // The shapes first: on the snake they turn down 60% of the candidates, OpenMesh's
         // topological check (the dearer one) 2%.
         const double a = after_collapse(h, len[at] < kSpeck * h_);
-        if (a < best_thin && a <= ring_thinness(from) && m_.is_collapse_ok(h)) best_thin = a, best = h;
+        if (a < best_thin && a <= ring_thinness(from) && ht::collapse_ok(m_, h)) best_thin = a, best = h;
       }
       if (!best.is_valid()) continue;
-      m_.collapse(best);
+      ht::collapse(m_, best);
       ++done;
     }
     return done;
@@ -285,7 +286,7 @@ class Improver {
     const std::size_t n = m_.n_vertices();
     for (std::size_t vi = 0; vi < n; ++vi) {
       const VH v{int(vi)};
-      if (m_.status(v).deleted() || locked(v) || m_.is_boundary(v) || m_.valence(v) != 3 || near_locked(v)) continue;
+      if (m_.status(v).deleted() || locked(v) || m_.is_boundary(v) || ht::valence(m_, v) != 3 || near_locked(v)) continue;
       if (!(ring_thinness(v) > kNeedleCos)) continue;
       // Collapsing v into `to` turns v's face without `to` into the triangle that stays.
       const HH h = m_.halfedge_handle(v);
@@ -298,8 +299,8 @@ class Improver {
       }
       if (thinness(q[0], q[1], q[2]) > kNeedleCos || glm::dot(unit_normal(q[0], q[1], q[2]), ring_normal(v)) < kTurnCos)
         continue;
-      if (!m_.is_collapse_ok(h)) continue;
-      m_.collapse(h);
+      if (!ht::collapse_ok(m_, h)) continue;
+      ht::collapse(m_, h);
       ++done;
     }
     return done;
@@ -320,8 +321,8 @@ class Improver {
     if (glm::dot(n1, n2) < kCoplanarCos) return false;  // a crease or a tight bend keeps its edge
     const glm::dvec3 up = n1 + n2;
     if (glm::dot(unit_normal(pa, pd, pc), up) <= 0 || glm::dot(unit_normal(pd, pb, pc), up) <= 0) return false;
-    if (!m_.is_flip_ok(e)) return false;
-    m_.flip(e);
+    if (!ht::flip_ok(m_, e)) return false;
+    ht::flip(m_, e);
     return true;
   }
 

@@ -1,6 +1,7 @@
 // Collapsing folds away; see meshers/unfold.hpp.
 #include "meshers/unfold.hpp"
 
+#include "meshers/halfedge_ops.hpp"
 #include "meshers/relax.hpp"
 #include "meshers/submesh.hpp"
 #include "nodes/trimesh.hpp"
@@ -88,9 +89,9 @@ class Collapser {
     for (const HH x : order) {
       const VH from = m_.from_vertex_handle(x);
       if (m_.property(locked_, from) || (!widely_ && crease(from) && !crease(m_.to_vertex_handle(x)))) continue;
-      if (m_.is_boundary(from) || beside_rim(from, m_.to_vertex_handle(x)) || !m_.is_collapse_ok(x) || !keeps_faces(x))
+      if (m_.is_boundary(from) || beside_rim(from, m_.to_vertex_handle(x)) || !ht::collapse_ok(m_, x) || !keeps_faces(x))
         continue;
-      m_.collapse(x);
+      ht::collapse(m_, x);
       return true;
     }
     return false;
