@@ -345,7 +345,8 @@ class Remesher {
     for (std::size_t i = 0; i < moving.size(); ++i) {
       const auto v = moving[i];
       const auto saved = m_.point(v);
-      std::vector<glm::dvec3> before;
+      std::vector<glm::dvec3>& before = ring_normals_;
+      before.clear();
       for (const auto f : m_.vf_range(v)) before.push_back(normal(f));
       m_.set_point(v, om(at[i]));
       std::size_t k = 0;
@@ -359,6 +360,7 @@ class Remesher {
   std::vector<std::pair<TriMesh::FaceHandle, glm::dvec3>> faces_before_;  // keeps_faces' scratch
   std::vector<int> valence_;  // flip's: each vertex's valence
   std::vector<glm::dvec3> face_normal_;  // relax's: each face's unit normal before the moves
+  std::vector<glm::dvec3> ring_normals_;  // relax's: the normals around the vertex being moved
   OpenMesh::VPropHandleT<bool> locked_;
   OpenMesh::VPropHandleT<bool> creased_;  // locked by lock_creases() alone (not a rim, not fixed)
   OpenMesh::VPropHandleT<std::uint32_t> origin_;
