@@ -25,32 +25,6 @@ using namespace mesh_detail;
 
 namespace {
 
-// Every use of OpenMesh's IO holds openmesh_io_mutex() (nodes/openmesh_io.hpp) and its chatter
-// is muted: our own messages say what is wrong, with the file name.
-class QuietOpenMesh {
- public:
-  QuietOpenMesh()
-      : lock_(openmesh_io_mutex()),
-        err_(::omerr().is_enabled()),
-        log_(::omlog().is_enabled()),
-        out_(::omout().is_enabled()) {
-    ::omerr().disable();
-    ::omlog().disable();
-    ::omout().disable();
-  }
-  ~QuietOpenMesh() {
-    if (err_) ::omerr().enable();
-    if (log_) ::omlog().enable();
-    if (out_) ::omout().enable();
-  }
-  QuietOpenMesh(const QuietOpenMesh&) = delete;
-  QuietOpenMesh& operator=(const QuietOpenMesh&) = delete;
-
- private:
-  std::lock_guard<std::mutex> lock_;
-  bool err_, log_, out_;
-};
-
 // Records what the reader states before OpenMesh's importer gets to "fix" it: the importer
 // drops faces with bad indices and duplicates the vertices of faces that would make an edge
 // non-manifold, which would hide exactly the defects validation has to report. Only the points

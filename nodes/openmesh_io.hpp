@@ -2,6 +2,8 @@
 // writes meshes through it (nodes/mesh_leaf.cpp, meshers/mesh_io.cpp).
 #pragma once
 
+#include <OpenMesh/Core/System/omstream.hh>
+
 #include <mutex>
 
 namespace ht {
@@ -17,5 +19,33 @@ inline std::mutex& openmesh_io_mutex() {
   static std::mutex m;
   return m;
 }
+
+/// Holds openmesh_io_mutex() and mutes OpenMesh's message streams (omerr, omlog, omout) for
+/// its lifetime, restoring those that were on: our own messages say what is wrong, with the file
+/// name, and a writer's "[OBJWriter] : write file" is no news to a user. Every OpenMesh read or
+/// write runs inside one.
+class QuietOpenMesh {
+ public:
+  QuietOpenMesh()
+      : lock_(openmesh_io_mutex()),
+        err_(::omerr().is_enabled()),
+        log_(::omlog().is_enabled()),
+        out_(::omout().is_enabled()) {
+    ::omerr().disable();
+    ::omlog().disable();
+    ::omout().disable();
+  }
+  ~QuietOpenMesh() {
+    if (err_) ::omerr().enable();
+    if (log_) ::omlog().enable();
+    if (out_) ::omout().enable();
+  }
+  QuietOpenMesh(const QuietOpenMesh&) = delete;
+  QuietOpenMesh& operator=(const QuietOpenMesh&) = delete;
+
+ private:
+  std::lock_guard<std::mutex> lock_;
+  bool err_, log_, out_;
+};
 
 }  // namespace ht
