@@ -197,8 +197,8 @@ MeshRun run_mesh(const Tree& tree, const MeshRunOptions& o) {
   }
   const auto t2 = clock::now();
   const TriangleMesh& mesh = *run.result.mesh;
-  run.checks = check_mesh(mesh);
-  if (!mesh.triangles.empty()) {
+  run.checks = check_mesh(mesh, o.full_checks);
+  if (!mesh.triangles.empty() && o.full_checks) {
     // On tapes specialized to bricks of sixteen cells (as the local strategies'; eight compiles
     // twice the bricks for little shorter tapes): a big tree's root tape would pay for every
     // primitive at each of the vertices and face centres.

@@ -37,13 +37,17 @@ struct MeshRunOptions {
   /// As MeshOptions::cache (not owned). With a disk level (NodeCache::disk()), the run trims
   /// the folder to its bound (DiskCache::trim) when it has meshed.
   NodeCache* cache = nullptr;
+  /// The checks' costly part: the self-intersecting pairs (a search of the whole mesh) and the
+  /// surface error (the field at every vertex and face centre). Without it `checks` holds the
+  /// topology, shapes and volume, self_intersecting_pairs 0 and no surface error.
+  bool full_checks = true;
 };
 
 struct MeshRun {
   MeshOptions options;       ///< what the plan ran with
   std::string strategy;      ///< "auto", "global" or "local"
   MeshResult result;         ///< the mesh (never null) and one report per job
-  MeshChecks checks;         ///< of result.mesh, surface error included when it is not empty
+  MeshChecks checks;         ///< of result.mesh; with full_checks, surface error included when it is not empty
   std::optional<DiskCacheStats> disk;  ///< with a disk level: what this run counted there
   double mesh_seconds = 0.0, check_seconds = 0.0;
 };

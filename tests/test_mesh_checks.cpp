@@ -301,6 +301,32 @@ TEST(MeshChecks, LeafBlendedWithABallKeepsItsFarTriangles) {
   EXPECT_GT(c.smooth_triangles, 0u);
 }
 
+TEST(MeshChecks, WithoutFullChecksTheTopologyStaysAndTheFieldIsNotTaken) {
+  // The CLI's run without --stats-json: the same mesh and topology figures, no surface error.
+  const auto leaf = MeshLeaf::load(test::cgal_mesh("eight.off"));
+  Builder b(kT);
+  const Aabb box = leaf->bounds();
+  const double size = glm::length(box.hi - box.lo);
+  const Tree t = b.build(b.blend({b.mesh(leaf, {0.02 * size}), b.point(box.hi, {0.1 * size})}));
+  MeshRunOptions o;
+  o.precision = 0.01 * size;
+  const MeshRun full = run_mesh(t, o);
+  o.full_checks = false;
+  const MeshRun lean = run_mesh(t, o);
+  ASSERT_EQ(lean.result.mesh->triangles, full.result.mesh->triangles);
+  const MeshChecks &f = full.checks, &l = lean.checks;
+  EXPECT_TRUE(l.watertight());
+  EXPECT_EQ(l.components, f.components);
+  EXPECT_EQ(l.genus, f.genus);
+  EXPECT_EQ(l.volume, f.volume);
+  EXPECT_EQ(l.min_angle_p1, f.min_angle_p1);
+  EXPECT_GT(f.face_error_max, 0.0);
+  EXPECT_EQ(l.face_error_max, 0.0);
+  EXPECT_EQ(l.vertex_error_max, 0.0);
+  EXPECT_EQ(l.kept_triangles, 0u);
+  EXPECT_GT(f.kept_triangles, 0u);
+}
+
 TEST(MeshChecks, CreaseTrianglesLieAlongTheCrease) {
   // A ball minus a ball with min/max: the crease is the circle where the two spheres meet. Every
   // The crease triangles are about as many as the triangles with a corner near both spheres;

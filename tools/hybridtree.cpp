@@ -263,6 +263,7 @@ int cmd_mesh(const MeshArgs& a) {
   options.memory_gib = a.memory_gib;
   options.sharp_features = a.sharp == "on";
   options.quality = a.quality == "on";
+  options.full_checks = !a.stats_json.empty();  // the summary line needs the topology alone
   options.progress = progress_bar();
   options.cancel = &interrupted;
   std::unique_ptr<ht::DiskCache> disk;
