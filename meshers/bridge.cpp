@@ -128,10 +128,15 @@ std::vector<glm::uvec3> zip(const std::vector<glm::dvec3>& pos, const std::vecto
   return out;
 }
 
-// Per vertex: the sum of the unit normals of its triangles (the direction of the surface there).
-std::vector<glm::dvec3> vertex_normals(const TriangleMesh& m) {
+// Per vertex of `loops`: the sum of the unit normals of its triangles (the direction of the
+// surface there), in triangle order; 0 elsewhere (the bands read the loops' alone).
+std::vector<glm::dvec3> loop_normals(const TriangleMesh& m, std::span<const std::vector<std::uint32_t>> loops) {
+  std::vector<std::uint8_t> on(m.positions.size(), 0);
+  for (const auto& loop : loops)
+    for (const std::uint32_t v : loop) on[v] = 1;
   std::vector<glm::dvec3> n(m.positions.size(), glm::dvec3(0.0));
   for (const glm::uvec3& t : m.triangles) {
+    if (!on[t[0]] && !on[t[1]] && !on[t[2]]) continue;
     const glm::dvec3 f = normal(m.positions, t[0], t[1], t[2]);
     for (int k = 0; k < 3; ++k) n[t[k]] += f;
   }
@@ -247,12 +252,17 @@ TriangleMesh pull_back_boundary(const TriangleMesh& mesh) {
 TriangleMesh bridge(std::span<const TriangleMesh* const> operands, const TriangleMesh& patch, double max_width,
                     BridgeStats* stats, std::uint32_t* patch_begin) {
   TriangleMesh out;
-  for (const TriangleMesh* m : operands) append(out, *m);
-  const TriangleMesh ops = out;  // the operands alone, to find their loops
+  std::vector<std::vector<std::uint32_t>> op_loops;  // each operand's, in the joined numbering
+  for (const TriangleMesh* m : operands) {
+    const std::uint32_t first = append(out, *m);
+    for (auto& loop : boundary_loops(*m)) {
+      for (std::uint32_t& v : loop) v += first;
+      op_loops.push_back(std::move(loop));
+    }
+  }
   const std::uint32_t base = append(out, patch);
   if (patch_begin) *patch_begin = base;
 
-  const auto op_loops = boundary_loops(ops);
   auto patch_loops = boundary_loops(patch);
   for (auto& l : patch_loops)
     for (auto& v : l) v += base;
@@ -285,7 +295,9 @@ TriangleMesh bridge(std::span<const TriangleMesh* const> operands, const Triangl
   const std::vector<std::size_t> specks = unfaced_specks(out.positions, patch, base, patch_loops, taken, 0.25 * max_width);
   if (op_loops.size() + specks.size() != patch_loops.size()) throw mismatch();
   for (const std::size_t l : specks) close_hole(out, patch_loops[l]);
-  const std::vector<glm::dvec3> side = vertex_normals(out);
+  std::vector<std::vector<std::uint32_t>> faced(op_loops);
+  for (std::size_t l = 0; l < op_loops.size(); ++l) faced.push_back(patch_loops[partner[l]]);
+  const std::vector<glm::dvec3> side = loop_normals(out, faced);
   std::vector<std::vector<glm::uvec3>> bands(op_loops.size());
   std::vector<double> widest(op_loops.size(), 0.0);
   tbb::parallel_for(std::size_t(0), op_loops.size(), [&](std::size_t l) {
