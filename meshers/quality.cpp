@@ -263,8 +263,8 @@ class Improver {
       for (const HH h : {shortest, m_.opposite_halfedge_handle(shortest)}) {
         const VH from = m_.from_vertex_handle(h);
         if (locked(from) || near_locked(from)) continue;
-        // The shapes first: on the snake they turn down 60% of the candidates, OpenMesh's
-        // topological check (the dearer one) 2%.
+        // The shapes first: on the snake they turn down 60% of the candidates, the link check
+        // 2%.
         const double a = after_collapse(h, len[at] < kSpeck * h_);
         if (a < best_thin && a <= ring_thinness(from) && ht::collapse_ok(m_, h)) best_thin = a, best = h;
       }
