@@ -76,18 +76,26 @@ bool link_manifold_triangles(TriMesh& m, std::span<const glm::uvec3> T) {
   }
   if (!one_fan_each(mate, first_out, uses)) return false;
 
-  // Edges in order of first use, halfedge 0 along that side.
+  // Edges in order of first use, halfedge 0 along that side. The arrays are sized once: new_edge
+  // and new_face would grow every property of the mesh by one element a call.
   std::vector<HH> half(3 * T.size());
   std::vector<std::uint8_t> made(3 * T.size(), 0);
+  int edges = 0;
   for (std::uint32_t s = 0; s < 3 * T.size(); ++s) {
     if (made[s]) continue;
-    const glm::uvec3& t = T[s / 3];
-    half[s] = m.new_edge(TriMesh::VertexHandle(int(t[s % 3])), TriMesh::VertexHandle(int(t[(s % 3 + 1) % 3])));
+    half[s] = HH(2 * edges++);
     made[s] = 1;
     if (mate[s] != kNone) half[mate[s]] = m.opposite_halfedge_handle(half[s]), made[mate[s]] = 1;
   }
+  m.resize(n, std::size_t(edges), T.size());
+  for (std::uint32_t s = 0; s < 3 * T.size(); ++s)
+    if (half[s].idx() % 2 == 0) {  // the side that made the edge: halfedge 0 runs along it
+      const glm::uvec3& t = T[s / 3];
+      m.set_vertex_handle(half[s], TriMesh::VertexHandle(int(t[(s % 3 + 1) % 3])));
+      m.set_vertex_handle(m.opposite_halfedge_handle(half[s]), TriMesh::VertexHandle(int(t[s % 3])));
+    }
   for (std::uint32_t t = 0; t < T.size(); ++t) {
-    const TriMesh::FaceHandle f = m.new_face();
+    const TriMesh::FaceHandle f{int(t)};
     for (std::uint32_t k = 0; k < 3; ++k) {
       m.set_face_handle(half[3 * t + k], f);
       m.set_next_halfedge_handle(half[3 * t + k], half[3 * t + (k + 1) % 3]);
