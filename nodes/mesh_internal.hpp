@@ -72,17 +72,21 @@ struct DeviceRelease {
 struct SceneRelease {
   void operator()(RTCScene s) const { rtcReleaseScene(s); }
 };
-// What a point query reads of each triangle, stored in Embree's (shell, primID) order, which
-// follows a Morton curve: a query's visits then touch neighbouring records instead of five
-// scattered arrays (those cache misses were most of a query's time).
+// What a point query reads of each triangle Embree hands over, stored in Embree's (shell,
+// primID) order, which follows a Morton curve: a query's visits then touch neighbouring records
+// instead of scattered arrays (those cache misses were most of a query's time). Most visits end
+// at the sphere or the disc; the few that pass read the corners from the mesh's arrays, which
+// is why the record does not copy them (48 bytes a triangle instead of 144). The sphere and the
+// disc only reject: their centre is rounded to float and their sizes are measured from that
+// centre and rounded up, so they still hold the whole triangle and answers stay bit for bit.
 struct TriRecord {
-  glm::dvec3 a, b, c;
-  glm::dvec3 centre;  // centroid; with reach, a bounding sphere that rejects far triangles early
-  glm::dvec3 normal;  // unit, or zero when degenerate: with the sphere, a disc that rejects tighter
-  double reach;
-  double thickness;   // the corners' largest distance from that plane (rounding, a needle's poor normal)
+  glm::dvec3 normal;  // the face normal: unit, or zero when degenerate; with the sphere, a disc
+  glm::vec3 centre;   // the centroid in float; with reach, a ball that rejects far triangles early
+  float reach;        // the corners' largest distance from `centre`, rounded up
+  float thickness;    // their largest distance from the plane through `centre` (rounded up)
   std::uint32_t tri;  // index into triangles_
 };
+static_assert(sizeof(TriRecord) == 48);
 
 }  // namespace ht::mesh_detail
 
@@ -98,9 +102,9 @@ struct MeshLeaf::Accel {
   std::unique_ptr<RTCDeviceTy, mesh_detail::DeviceRelease> device;
   std::unique_ptr<RTCSceneTy, mesh_detail::SceneRelease> scene;
   std::vector<float> vertices;            // xyz per vertex, plus padding Embree reads past the end
-  std::vector<std::uint32_t> order;       // triangles grouped by shell: global index of (shell, primID)
-  std::vector<std::uint32_t> offset;      // start of each shell in `order`
-  std::vector<glm::dvec3> face_normal;    // unit, zero for degenerate triangles
+  std::vector<std::uint32_t> order;       // while building: triangles grouped by shell, (shell, primID) -> triangle
+  std::vector<std::uint32_t> offset;      // start of each shell's records
+  std::vector<std::uint32_t> slot;        // triangle -> its record (`order` inverted, then dropped)
   std::vector<glm::dvec3> vertex_normal;  // angle-weighted sum of incident face normals
   std::vector<std::uint8_t> complex_vertex;  // several fans meet there (see compute_normals)
   std::vector<std::uint32_t> nbr;         // triangle across each half-edge: edge normal = sum of two
@@ -128,7 +132,7 @@ struct MeshLeaf::Accel {
     rh.ray.dir_z = dir[2];
     rh.ray.tnear = 0.0f;
     rh.ray.mask = ~0u;
-    for (std::size_t guard = 0; guard <= order.size(); ++guard) {
+    for (std::size_t guard = 0; guard <= offset.back(); ++guard) {
       rh.ray.tfar = std::numeric_limits<float>::infinity();
       rh.hit.geomID = RTC_INVALID_GEOMETRY_ID;
       rh.hit.instID[0] = RTC_INVALID_GEOMETRY_ID;
@@ -152,6 +156,8 @@ struct MeshLeaf::Accel {
   /// fans meet at the nearest point) the normal of triangle t or of its corners: never zero.
   glm::dvec3 unit_normal(const glm::dvec3& pseudo, std::uint32_t t, bool parity,
                          const std::vector<glm::uvec3>& tris) const;
+  /// Triangle t's unit normal, zero when degenerate (its record's).
+  const glm::dvec3& face_normal(std::uint32_t t) const { return records[slot[t]].normal; }
   std::size_t bytes() const;
 };
 

@@ -23,6 +23,12 @@ glm::dvec3 unit_or_zero(const glm::dvec3& v) {
   return l > 0 && std::isfinite(l) ? v / l : glm::dvec3(0.0);
 }
 
+// The nearest float at or above x.
+float float_up(double x) {
+  const float f = static_cast<float>(x);
+  return static_cast<double>(f) < x ? std::nextafter(f, std::numeric_limits<float>::infinity()) : f;
+}
+
 }  // namespace
 
 void MeshLeaf::Accel::morton_sort_shells(const std::vector<glm::dvec3>& pos, const std::vector<glm::uvec3>& tris) {
@@ -106,25 +112,25 @@ void MeshLeaf::Accel::compute_normals(const std::vector<glm::dvec3>& pos, const 
   // Each loop runs in parallel over independent items; the angle-weighted sums are added up in
   // triangle order afterwards, so the normals are the same bits at any thread count.
   records.resize(tris.size());
-  tbb::parallel_for(std::size_t(0), order.size(), [&](std::size_t slot) {
-    const glm::uvec3 t = tris[order[slot]];
-    TriRecord& r = records[slot];
-    r.a = pos[t[0]];
-    r.b = pos[t[1]];
-    r.c = pos[t[2]];
-    r.centre = (r.a + r.b + r.c) / 3.0;
-    r.reach = std::max({glm::length(r.a - r.centre), glm::length(r.b - r.centre), glm::length(r.c - r.centre)});
-    r.normal = unit_or_zero(glm::cross(r.b - r.a, r.c - r.a));
-    r.thickness = std::max({std::abs(glm::dot(r.a - r.centre, r.normal)), std::abs(glm::dot(r.b - r.centre, r.normal)),
-                            std::abs(glm::dot(r.c - r.centre, r.normal))});
-    r.tri = order[slot];
+  slot.resize(tris.size());
+  tbb::parallel_for(std::size_t(0), order.size(), [&](std::size_t s) {
+    const glm::uvec3 t = tris[order[s]];
+    const glm::dvec3 a = pos[t[0]], b = pos[t[1]], c = pos[t[2]];
+    TriRecord& r = records[s];
+    r.centre = glm::vec3((a + b + c) / 3.0);
+    r.normal = unit_or_zero(glm::cross(b - a, c - a));
+    const glm::dvec3 o(r.centre);
+    r.reach = float_up(std::max({glm::length(a - o), glm::length(b - o), glm::length(c - o)}));
+    r.thickness = float_up(std::max({std::abs(glm::dot(a - o, r.normal)), std::abs(glm::dot(b - o, r.normal)),
+                                     std::abs(glm::dot(c - o, r.normal))}));
+    r.tri = order[s];
+    slot[order[s]] = static_cast<std::uint32_t>(s);
   });
-  face_normal.resize(tris.size());
+  std::vector<std::uint32_t>().swap(order);
   std::vector<glm::dvec3> corner_normal(3 * tris.size());  // angle * face normal at each corner
   tbb::parallel_for(std::size_t(0), tris.size(), [&](std::size_t t) {
     const glm::dvec3 p[3] = {pos[tris[t][0]], pos[tris[t][1]], pos[tris[t][2]]};
-    const glm::dvec3 n = unit_or_zero(glm::cross(p[1] - p[0], p[2] - p[0]));
-    face_normal[t] = n;
+    const glm::dvec3& n = face_normal(static_cast<std::uint32_t>(t));
     for (int k = 0; k < 3; ++k) {
       const glm::dvec3 e1 = p[(k + 1) % 3] - p[k], e2 = p[(k + 2) % 3] - p[k];
       corner_normal[3 * t + std::size_t(k)] = std::atan2(glm::length(glm::cross(e1, e2)), glm::dot(e1, e2)) * n;
@@ -168,10 +174,10 @@ bool MeshLeaf::Accel::needs_parity(std::uint32_t t, int feature, const glm::dvec
 }
 
 glm::dvec3 MeshLeaf::Accel::pseudo_normal(std::uint32_t t, int feature, const std::vector<glm::uvec3>& tris) const {
-  if (feature == kFace) return face_normal[t];
+  if (feature == kFace) return face_normal(t);
   if (feature < kVertex) {
     const std::uint32_t g = nbr[3 * t + static_cast<std::uint32_t>(feature - kEdge)];
-    return g == kNone ? face_normal[t] : face_normal[t] + face_normal[g];
+    return g == kNone ? face_normal(t) : face_normal(t) + face_normal(g);
   }
   return vertex_normal[tris[t][feature - kVertex]];
 }
@@ -180,19 +186,19 @@ glm::dvec3 MeshLeaf::Accel::unit_normal(const glm::dvec3& pseudo, std::uint32_t 
                                         const std::vector<glm::uvec3>& tris) const {
   // Where fans meet (parity) the summed normal means nothing: the nearest face's stands in.
   glm::dvec3 n = parity ? glm::dvec3(0.0) : unit_or_zero(pseudo);
-  if (n == glm::dvec3(0.0)) n = face_normal[t];
+  if (n == glm::dvec3(0.0)) n = face_normal(t);
   for (std::uint32_t k = 0; k < 3 && n == glm::dvec3(0.0); ++k) n = unit_or_zero(vertex_normal[tris[t][k]]);
   // Only a triangle degenerate among degenerate ones gets here: any unit vector is as good.
   return n == glm::dvec3(0.0) ? glm::dvec3(0.0, 0.0, 1.0) : n;
 }
 
 std::size_t MeshLeaf::Accel::bytes() const {
-  return vertices.capacity() * sizeof(float) + (order.capacity() + offset.capacity() + nbr.capacity()) * 4 +
-         (face_normal.capacity() + vertex_normal.capacity()) * sizeof(glm::dvec3) + records.capacity() * sizeof(TriRecord) +
+  return vertices.capacity() * sizeof(float) + (order.capacity() + offset.capacity() + slot.capacity() + nbr.capacity()) * 4 +
+         vertex_normal.capacity() * sizeof(glm::dvec3) + records.capacity() * sizeof(TriRecord) +
          // Embree's own memory is not exposed: its index buffers (12 bytes per triangle) plus
          // a BVH estimate of 64 bytes per triangle (high-quality builds with spatial splits
          // measure around 40-80).
-         order.size() * (12 + 64);
+         records.size() * (12 + 64);
 }
 
 namespace {
@@ -201,6 +207,8 @@ namespace {
 struct PointQueryState {
   const TriRecord* records;     // Accel::records and Accel::offset: (shell, primID) -> record
   const std::uint32_t* offset;
+  const glm::dvec3* pos;        // the mesh's positions and triangles
+  const glm::uvec3* tris;
   glm::dvec3 p;
   float slack;
   double best2 = kInf;
@@ -235,19 +243,20 @@ bool point_query_visit(RTCPointQueryFunctionArguments* args) {
   const TriRecord& rec = st->records[st->offset[args->geomID] + args->primID];
   // Most triangles Embree hands over are far: their bounding sphere rejects them before the
   // exact (and costlier) closest-point computation.
-  const glm::dvec3 to_centre = st->p - rec.centre;
-  const double reach = rec.reach + st->best;
+  const glm::dvec3 to_centre = st->p - glm::dvec3(rec.centre);
+  const double reach = static_cast<double>(rec.reach) + st->best;
   if (glm::dot(to_centre, to_centre) >= reach * reach) return false;
   // The triangle lies in a disc of radius reach around its centre, thickness thick, so p is at
   // least sqrt(above^2 + gap^2) from it. Seen from above, a surface's triangles beside the
   // nearest one pass the sphere (their centres are barely farther than the nearest point) but
   // not the disc. The margin keeps rounding from rejecting a triangle as near as the best.
   const double across = glm::dot(to_centre, rec.normal);
-  const double above = std::max(0.0, std::abs(across) - rec.thickness);
-  const double gap = std::max(0.0, glm::length(to_centre - across * rec.normal) - rec.reach);
+  const double above = std::max(0.0, std::abs(across) - static_cast<double>(rec.thickness));
+  const double gap = std::max(0.0, glm::length(to_centre - across * rec.normal) - static_cast<double>(rec.reach));
   if (above * above + gap * gap > st->best2 * (1.0 + 1e-9)) return false;
   const std::uint32_t t = rec.tri;
-  const Nearest n = closest_on_triangle(st->p, rec.a, rec.b, rec.c);
+  const glm::uvec3 v = st->tris[t];
+  const Nearest n = closest_on_triangle(st->p, st->pos[v[0]], st->pos[v[1]], st->pos[v[2]]);
   const glm::dvec3 d = st->p - n.point;
   const double d2 = glm::dot(d, d);
   if (!(d2 < st->best2)) return false;
@@ -273,6 +282,8 @@ MeshLeaf::Closest MeshLeaf::query(const glm::dvec3& p, double radius, double bou
   const double mag = std::max({accel_->scale, std::abs(p.x), std::abs(p.y), std::abs(p.z)});
   PointQueryState st{accel_->records.data(),
                      accel_->offset.data(),
+                     surface_->positions.data(),
+                     surface_->triangles.data(),
                      p,
                      static_cast<float>(8 * FLT_EPSILON * mag)};
   RTCPointQuery q;

@@ -2,6 +2,7 @@
 // brute-force generalized winding number, orientation and repair do what the report says, and
 // bad input fails with a message that says what is wrong.
 #include "nodes/mesh_leaf.hpp"
+#include "nodes/primitives.hpp"
 #include "nodes/trimesh.hpp"
 #include "tests/support/test_support.hpp"
 
@@ -381,6 +382,43 @@ TEST(MeshQuery, BoundChangesNothing) {
     ASSERT_EQ(in[i] != 0, q.inside) << i;
     ASSERT_EQ(dist[i], std::isfinite(q.distance) ? float(q.distance) : std::numeric_limits<float>::infinity()) << i;
   }
+}
+
+// The query's sphere and disc tests keep their centre in float: placed far from the origin
+// (where a float centre is off by a good part of a small triangle), the mesh is asked at points
+// hugging its triangles near their corners, just above and below them, where the nearest
+// triangle beats its neighbours by less than that rounding. The answer is the exact minimum
+// over every triangle (the same closest-point routine), bit for bit: a test that rejected a
+// triangle it should not would give a larger distance.
+TEST(MeshQuery, FloatRejectionTestsLoseNoTriangle) {
+  Rng rng = seeded();
+  const auto src = MeshLeaf::load(test::cgal_mesh("eight.off"));
+  const glm::dvec3 shift(3000.0, -1700.0, 2300.0);
+  std::vector<glm::dvec3> pos = src->positions();
+  const double scale = 0.01;  // triangles about 1e-3 across, 3000 from the origin
+  for (glm::dvec3& p : pos) p = shift + scale * p;
+  const auto leaf = MeshLeaf::from_triangles(pos, src->triangles(), "far eight");
+  const auto& P = leaf->positions();
+  const auto& T = leaf->triangles();
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  std::size_t checked = 0;
+  for (int i = 0; i < 3000; ++i) {
+    const glm::uvec3 t = T[rng() % T.size()];
+    const int k = int(rng() % 3);
+    const glm::dvec3 a = P[t[k]], b = P[t[(k + 1) % 3]], c = P[t[(k + 2) % 3]];
+    const glm::dvec3 n = glm::normalize(glm::cross(b - a, c - a));
+    const double edge = glm::length(b - a);
+    const double s = 1e-3 * u(rng), r = 1e-3 * u(rng);
+    const glm::dvec3 p = a + s * (b - a) + r * (c - a) + (u(rng) - 0.5) * 1e-4 * edge * n;
+    double best2 = std::numeric_limits<double>::infinity();
+    for (const glm::uvec3& q : T) {
+      const glm::dvec3 d = p - closest_on_triangle(p, P[q[0]], P[q[1]], P[q[2]]).point;
+      best2 = std::min(best2, glm::dot(d, d));
+    }
+    ASSERT_EQ(leaf->query(p, 0.1 * edge).distance, std::sqrt(best2)) << i;
+    ++checked;
+  }
+  EXPECT_EQ(checked, 3000u);
 }
 
 TEST(MeshQuery, ConcurrentQueriesAgreeWithSerial) {
