@@ -132,8 +132,8 @@ namespace {
 // once per corner at v, linked when they share a vertex besides v, form one group.
 // boundary_edges against its definition: the edges exactly one side lies on (a corner named
 // twice makes a side from a vertex to itself), with that side's direction and slot, ordered by
-// lower then upper vertex; on soups small and large (past the size the sides are counted in
-// parallel ranges), where edges are shared by one, two or more sides.
+// lower then upper vertex; on soups small and large (thousands of sides under one vertex), where
+// edges are shared by one, two or more sides.
 TEST(MeshChecks, BoundaryEdgesAreTheEdgesOneSideLiesOn) {
   test::Rng rng = test::seeded();
   std::size_t found = 0;
