@@ -213,14 +213,17 @@ TriangleMesh blend_patch(const LocalInput& in, const BlendFields& bf, const std:
   return side;
 }
 
-// The operands' trimmed meshes and the patch joined by bands, evened out and untangled.
-TriangleMesh close_with_bands(const std::vector<TriangleMesh>& pieces, const TriangleMesh& side, const Aabb& clip,
+// The operands' trimmed meshes and the patch joined by bands, evened out and untangled. Takes
+// the pieces and the patch: they are freed once joined, before the remeshing's own scratch.
+TriangleMesh close_with_bands(std::vector<TriangleMesh>&& pieces, TriangleMesh&& side, const Aabb& clip,
                               const BatchGradient& field, const LocalInput& in, LocalStats& st) {
   std::vector<const TriangleMesh*> ops;
   for (const TriangleMesh& piece : pieces)
     if (!piece.triangles.empty()) ops.push_back(&piece);
   std::uint32_t first_patch = 0;
   TriangleMesh out = bridge(ops, side, 8.0 * in.precision, &st.bridge, &first_patch);
+  std::vector<TriangleMesh>().swap(pieces);
+  side = TriangleMesh();
   relax_band(out, first_patch, field, in.threshold);
   Aabb changed;
   if (in.remesh_seams) {
@@ -273,7 +276,7 @@ TriangleMesh trim_blend(const LocalInput& in, LocalStats* stats) {
   TriangleMesh out;
   if (meets.empty()) {
     cut_operands();
-    out = join(pieces, seam_options(in, true), st);  // nothing meets: the operands' meshes as they are
+    out = join(std::move(pieces), seam_options(in, true), st);  // nothing meets: the operands' meshes as they are
   } else {
     SurfaceField surface = node_surface(in);
     const BatchGradient field = gradient_of(surface);
@@ -286,7 +289,7 @@ TriangleMesh trim_blend(const LocalInput& in, LocalStats* stats) {
     st.patch_precision = patch_stats.patch_precision;
     st.patch = patch_stats.patch;
     st.patch_triangles = patch_stats.patch_triangles;
-    out = close_with_bands(pieces, side, clip, field, in, st);
+    out = close_with_bands(std::move(pieces), std::move(side), clip, field, in, st);
   }
   if (stats) *stats = st;
   return out;
@@ -319,10 +322,10 @@ TriangleMesh trim_local_blend(const LocalInput& in, LocalStats* stats) {
   StitchOptions so = seam_options(in, false);
   so.max_gap = 0.3 * in.precision;
   so.allow_open = true;
-  const TriangleMesh joined = join(pieces, so, st);
+  TriangleMesh joined = join(std::move(pieces), so, st);
   TriangleMesh out;
   if (st.stitch.left_open == 0 || acts.empty()) {
-    out = joined;
+    out = std::move(joined);
     st.self_intersections = intersections_in(out, near.expanded(2.0 * in.precision)).size();
   } else {
     // The blended part: the node's surface where R may act, cut to where it does.
@@ -342,7 +345,9 @@ TriangleMesh trim_local_blend(const LocalInput& in, LocalStats* stats) {
     TriangleMesh side = pull_back_boundary(cut_mesh(p, in_region, cut_options(in)));
     relax_boundary(side, field, T);
     st.patch_triangles = side.triangles.size();
-    out = close_with_bands({joined}, side, acts, field, in, st);
+    std::vector<TriangleMesh> joined_pieces;
+    joined_pieces.push_back(std::move(joined));
+    out = close_with_bands(std::move(joined_pieces), std::move(side), acts, field, in, st);
   }
   if (stats) *stats = st;
   return out;

@@ -20,11 +20,17 @@ namespace {
 // An operand of one Boolean step: its mesh, its field, where that field may be non-zero, and the
 // tape that projects the vertices its refinement adds (the operand's own; none for the result of
 // earlier steps, whose refinement splits at midpoints: no single surface is its own).
+// An operand straight from a child job keeps no copy of its mesh between cuts: `mesh` is made
+// from `source` and the refinements so far when a cut needs it, and dropped after, so that the
+// stitch and the search after it do not hold a refined copy of a big operand (a mesh leaf's
+// whole triangle set) beside their own.
 struct BooleanOperand {
   TriangleMesh mesh;
   BatchField field;
   Aabb support;
   std::shared_ptr<const TapeEvaluator> surface;
+  const TriangleMesh* source = nullptr;               // the child's mesh; null once `mesh` is a result
+  std::vector<std::pair<Aabb, double>> refinements;  // applied to `source` in turn: region, edge
 };
 
 BatchField shifted(const BatchField& f, double a, double b) {
@@ -45,8 +51,25 @@ TriangleMesh boolean_step(const LocalInput& in, NodeKind kind, BooleanOperand& a
   const bool keep_a_outside = kind != NodeKind::Intersection;
   const bool keep_b_outside = kind == NodeKind::Union;
   const Aabb meet = intersect(a.support, b.support), near = meet.expanded(2.0 * in.precision);
+  auto warp = [&](const BooleanOperand& o, const TriangleMesh& m, const Aabb& region, double edge) {
+    return warp_mesh(m, [](const glm::dvec3& p) { return p; }, o.surface.get(), T, edge, nullptr, &region);
+  };
+  // The operand's refined mesh, made again from its source when it was dropped.
+  auto materialize = [&](BooleanOperand& o) {
+    if (!o.source || !o.mesh.triangles.empty()) return;
+    for (std::size_t r = 0; r < o.refinements.size(); ++r)
+      o.mesh = warp(o, r == 0 ? *o.source : o.mesh, o.refinements[r].first, o.refinements[r].second);
+  };
   auto refine = [&](BooleanOperand& o, const Aabb& region, double edge) {
-    o.mesh = warp_mesh(o.mesh, [](const glm::dvec3& p) { return p; }, o.surface.get(), T, edge, nullptr, &region);
+    materialize(o);
+    o.mesh = warp(o, o.source && o.refinements.empty() ? *o.source : o.mesh, region, edge);
+    if (o.source) o.refinements.emplace_back(region, edge);
+  };
+  auto cut = [&](BooleanOperand& o, const BatchField& f) {
+    materialize(o);
+    TriangleMesh piece = cut_mesh(o.mesh, f, cut_options(in));
+    if (o.source) o.mesh = TriangleMesh();
+    return piece;
   };
   double edge = 1.5 * in.precision;
   refine(a, meet.expanded(in.precision), edge);
@@ -54,12 +77,12 @@ TriangleMesh boolean_step(const LocalInput& in, NodeKind kind, BooleanOperand& a
   TriangleMesh out;
   for (int round = 0;; ++round) {
     std::vector<TriangleMesh> pieces;
-    pieces.push_back(cut_mesh(a.mesh, keep_a_outside ? shifted(b.field, 1, -T) : shifted(b.field, -1, T), cut_options(in)));
-    pieces.push_back(cut_mesh(b.mesh, keep_b_outside ? shifted(a.field, 1, -T) : shifted(a.field, -1, T), cut_options(in)));
+    pieces.push_back(cut(a, keep_a_outside ? shifted(b.field, 1, -T) : shifted(b.field, -1, T)));
+    pieces.push_back(cut(b, keep_b_outside ? shifted(a.field, 1, -T) : shifted(a.field, -1, T)));
     if (kind == NodeKind::Difference) flip(pieces[1]);
     st.kept_triangles = count_triangles(pieces);
     std::vector<std::uint8_t> seam;
-    out = join(pieces, seam_options(in, false), st, &seam);
+    out = join(std::move(pieces), seam_options(in, false), st, &seam);
     // The seam is the crease: it stays. Only where the operands meet can the result intersect.
     st.self_intersections = untangle(out, seam, gradient_of(node_field), T, near).size();
     if (st.self_intersections == 0 || round == 2) break;
@@ -105,9 +128,13 @@ TriangleMesh trim_boolean(const LocalInput& in, LocalStats* stats) {
   auto operand_of = [&](std::size_t i) {
     const NodeField f(in, c[i], false);
     st.operand_triangles += operand(in, i).triangles.size();
-    return BooleanOperand{operand(in, i), [f](std::span<const glm::dvec3> p, std::span<double> v) { f(p, v); }, f.support(),
+    return BooleanOperand{{},
+                          [f](std::span<const glm::dvec3> p, std::span<double> v) { f(p, v); },
+                          f.support(),
                           std::make_shared<const TapeEvaluator>(
-                              std::make_shared<const Tape>(compile_tape(in.graph, c[i], in.threshold)))};
+                              std::make_shared<const Tape>(compile_tape(in.graph, c[i], in.threshold))),
+                          &operand(in, i),
+                          {}};
   };
   BooleanOperand acc = operand_of(0);
   for (std::size_t i = 1; i < c.size(); ++i) {
@@ -116,6 +143,8 @@ TriangleMesh trim_boolean(const LocalInput& in, LocalStats* stats) {
     if (st.self_intersections) break;
     fold_into(acc, b, kind, in.threshold);
     acc.surface = nullptr;
+    acc.source = nullptr;  // its mesh is this step's result now
+    acc.refinements.clear();
   }
   if (stats) *stats = st;
   return std::move(acc.mesh);

@@ -137,12 +137,10 @@ StitchOptions seam_options(const LocalInput& in, bool onto_earlier) {
 }
 
 // Stitches the non-empty pieces.
-TriangleMesh join(const std::vector<TriangleMesh>& pieces, const StitchOptions& so, LocalStats& st,
+TriangleMesh join(std::vector<TriangleMesh>&& pieces, const StitchOptions& so, LocalStats& st,
                   std::vector<std::uint8_t>* seam) {
-  std::vector<const TriangleMesh*> ptrs;
-  for (const TriangleMesh& p : pieces)
-    if (!p.triangles.empty()) ptrs.push_back(&p);
-  return stitch(ptrs, so, &st.stitch, seam);
+  std::erase_if(pieces, [](const TriangleMesh& p) { return p.triangles.empty(); });
+  return stitch(std::move(pieces), so, &st.stitch, seam);
 }
 
 // The node's own field, where a result's vertices are projected back.

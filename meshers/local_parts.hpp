@@ -94,8 +94,8 @@ std::uint8_t octants_where(const Aabb& brick, double margin, const std::function
 /// Seams of this node: gaps up to 3/4 of the precision; `onto_earlier` where the pieces meet
 /// smoothly, not at a crease (meshers/stitch.hpp).
 StitchOptions seam_options(const LocalInput& in, bool onto_earlier);
-/// Stitches the non-empty pieces; `seam` as in stitch().
-TriangleMesh join(const std::vector<TriangleMesh>& pieces, const StitchOptions& so, LocalStats& st,
+/// Stitches the non-empty pieces, taking them (freed as they are copied in); `seam` as in stitch().
+TriangleMesh join(std::vector<TriangleMesh>&& pieces, const StitchOptions& so, LocalStats& st,
                   std::vector<std::uint8_t>* seam = nullptr);
 /// The node's own field, where a result's vertices are projected back.
 std::shared_ptr<const TapeEvaluator> node_tape(const LocalInput& in);

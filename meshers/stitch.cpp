@@ -34,6 +34,23 @@ Soup concatenate(std::span<const TriangleMesh* const> pieces) {
   return s;
 }
 
+// The same from pieces the soup may take: each is freed once appended, so the pieces and their
+// concatenation are not all held at once.
+Soup concatenate(std::vector<TriangleMesh>&& pieces) {
+  Soup s;
+  std::size_t vertices = 0, triangles = 0;
+  for (const TriangleMesh& p : pieces) vertices += p.positions.size(), triangles += p.triangles.size();
+  s.positions.reserve(vertices);
+  s.triangles.reserve(triangles);
+  s.piece.reserve(vertices);
+  for (std::size_t k = 0; k < pieces.size(); ++k) {
+    append(s, pieces[k]);
+    s.piece.resize(s.positions.size(), std::uint32_t(k));
+    pieces[k] = TriangleMesh();
+  }
+  return s;
+}
+
 // Directed boundary edges (used by one triangle), each with its triangle and slot.
 struct Boundary {
   std::vector<std::uint32_t> from, to, slot;  // slot = 3 * triangle + corner of `from`
@@ -188,17 +205,11 @@ void match(const Soup& s, const Boundary& b, const std::vector<Partner>& partner
   }
 }
 
-}  // namespace
-
-TriangleMesh stitch(std::span<const TriangleMesh* const> pieces, const StitchOptions& o, StitchStats* stats,
-                    std::vector<std::uint8_t>* seam) {
+TriangleMesh stitch_soup(Soup s, const StitchOptions& o, StitchStats* stats, std::vector<std::uint8_t>* seam) {
   StitchStats st;
-  if (pieces.size() > 64) throw StitchError("stitching takes at most 64 pieces");
-  const Soup s = concatenate(pieces);
   const Boundary b = find_boundary(s);
   UnionFind uf(s.positions.size());
   std::vector<std::vector<Insertion>> inserted(b.from.size());
-  std::vector<glm::dvec3> position = s.positions;
   if (!b.from.empty()) {
     if (!(o.max_gap > 0)) throw StitchError("stitching open pieces needs a max_gap > 0");
     double longest = 0;
@@ -207,22 +218,28 @@ TriangleMesh stitch(std::span<const TriangleMesh* const> pieces, const StitchOpt
     match(s, b, partner, o, uf, inserted, st);
     // A vertex inserted into an earlier piece's edge moves onto it: the seam is the earlier
     // piece's polyline exactly, so two nearly tangent pieces cannot zigzag across each other.
+    // Every move is found from the positions before any (an edge's ends may be inserted
+    // vertices too), then made.
+    std::vector<std::pair<std::uint32_t, glm::dvec3>> moves;
     for (std::uint32_t e = 0; e < inserted.size(); ++e)
       for (const Insertion& in : inserted[e])
         if (o.onto_earlier && s.piece[b.from[e]] < s.piece[in.vertex]) {
           const glm::dvec3 a = s.positions[b.from[e]], d = s.positions[b.to[e]] - a;
-          position[in.vertex] = a + in.t * d;
+          moves.emplace_back(in.vertex, a + in.t * d);
         }
+    for (const auto& [v, p] : moves) s.positions[v] = p;
   }
 
   // Output vertices: one per weld class, in order of the class's first id.
   TriangleMesh out;
+  out.positions.reserve(s.positions.size());
+  out.triangles.reserve(s.triangles.size() + 2 * st.inserted);  // a fan adds a triangle an insertion
   std::vector<std::uint32_t> index(s.positions.size(), kNo);
   for (std::uint32_t v = 0; v < s.positions.size(); ++v) {
     const std::uint32_t r = uf.find(v);
     if (index[r] == kNo) {
       index[r] = std::uint32_t(out.positions.size());
-      out.positions.push_back(position[r]);
+      out.positions.push_back(s.positions[r]);
       if (seam) seam->push_back(b.out_edge[r] != kNo);
     }
     index[v] = index[r];
@@ -270,6 +287,20 @@ TriangleMesh stitch(std::span<const TriangleMesh* const> pieces, const StitchOpt
   }
   if (stats) *stats = st;
   return out;
+}
+
+}  // namespace
+
+TriangleMesh stitch(std::span<const TriangleMesh* const> pieces, const StitchOptions& o, StitchStats* stats,
+                    std::vector<std::uint8_t>* seam) {
+  if (pieces.size() > 64) throw StitchError("stitching takes at most 64 pieces");
+  return stitch_soup(concatenate(pieces), o, stats, seam);
+}
+
+TriangleMesh stitch(std::vector<TriangleMesh>&& pieces, const StitchOptions& o, StitchStats* stats,
+                    std::vector<std::uint8_t>* seam) {
+  if (pieces.size() > 64) throw StitchError("stitching takes at most 64 pieces");
+  return stitch_soup(concatenate(std::move(pieces)), o, stats, seam);
 }
 
 }  // namespace ht

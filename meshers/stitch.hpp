@@ -56,5 +56,9 @@ struct StitchError : std::runtime_error {
 /// With `seam`, receives one flag per output vertex: 1 on a seam (a piece's boundary).
 TriangleMesh stitch(std::span<const TriangleMesh* const> pieces, const StitchOptions& options,
                     StitchStats* stats = nullptr, std::vector<std::uint8_t>* seam = nullptr);
+/// The same, taking the pieces: each is freed as soon as it is copied in, so the peak memory
+/// holds the pieces once instead of twice.
+TriangleMesh stitch(std::vector<TriangleMesh>&& pieces, const StitchOptions& options,
+                    StitchStats* stats = nullptr, std::vector<std::uint8_t>* seam = nullptr);
 
 }  // namespace ht
