@@ -232,28 +232,30 @@ TriangleMesh cut_once(const TriangleMesh& mesh, std::span<const double> cv, cons
     if (!all_known) s.root_evaluations += find_roots(pos, cv, c, options, x);
   }
 
-  TriangleMesh out;
-  std::vector<std::uint32_t> index(pos.size() + x.keys.size(), ~0u);
-  auto use = [&](std::uint32_t v) {  // vertices 0..n-1 are the mesh's, n.. the roots
-    if (index[v] == ~0u) index[v] = 0;
-    return v;
-  };
-  std::vector<std::array<std::uint32_t, 4>> polys;  // a triangle has ~0u as its fourth corner
-  polys.reserve(mesh.triangles.size());
-  std::uint32_t poly[4];
-  for (const glm::uvec3& t : mesh.triangles) {
+  // Each triangle's kept polygon: its corners on the kept side and the roots between, in order
+  // (vertices 0..n-1 are the mesh's, n.. the roots). Made twice, to mark the vertices used and
+  // then to emit, rather than stored (16 bytes a triangle at the peak of a Boolean).
+  auto polygon = [&](const glm::uvec3& t, std::uint32_t (&poly)[4]) {
     int n = 0;
     for (int k = 0; k < 3; ++k) {
       const std::uint32_t a = t[k], b = t[(k + 1) % 3];
-      if (side[a] <= 0) poly[n++] = use(a);
-      if (side[a] * side[b] < 0) poly[n++] = use(std::uint32_t(pos.size()) + x.find(a, b));
+      if (side[a] <= 0) poly[n++] = a;
+      if (side[a] * side[b] < 0) poly[n++] = std::uint32_t(pos.size()) + x.find(a, b);
     }
+    return n;
+  };
+  std::vector<std::uint32_t> index(pos.size() + x.keys.size(), ~0u);
+  std::uint32_t poly[4];
+  std::size_t used = 0, emitted = 0;
+  for (const glm::uvec3& t : mesh.triangles) {
+    const int n = polygon(t, poly);
     if (n < 3) {
       ++s.dropped_triangles;
       continue;
     }
     ++(n == 3 && side[t[0]] < 0 && side[t[1]] < 0 && side[t[2]] < 0 ? s.kept_triangles : s.clipped_triangles);
-    polys.push_back({poly[0], poly[1], poly[2], n == 4 ? poly[3] : ~0u});
+    emitted += std::size_t(n - 2);
+    for (int k = 0; k < n; ++k) used += index[poly[k]] == ~0u, index[poly[k]] = 0;
   }
   // Positions: the mesh's used vertices in order, then the used roots.
   auto position = [&](std::uint32_t v) {
@@ -262,6 +264,9 @@ TriangleMesh cut_once(const TriangleMesh& mesh, std::span<const double> cv, cons
     const glm::dvec3 a = pos[x.kept_end[i]], b = pos[x.cut_end[i]];
     return a + x.t[i] * (b - a);
   };
+  TriangleMesh out;
+  out.positions.reserve(used);
+  source.reserve(used);
   for (std::uint32_t v = 0; v < index.size(); ++v)
     if (index[v] != ~0u) {
       index[v] = std::uint32_t(out.positions.size());
@@ -271,14 +276,16 @@ TriangleMesh cut_once(const TriangleMesh& mesh, std::span<const double> cv, cons
       if (v >= pos.size()) ++s.new_vertices;
       else ++s.kept_vertices;
     }
-  out.triangles.reserve(polys.size() + polys.size() / 8);
-  for (const auto& p : polys) {
-    if (p[3] == ~0u) {
-      out.triangles.push_back({index[p[0]], index[p[1]], index[p[2]]});
+  out.triangles.reserve(emitted);
+  for (const glm::uvec3& t : mesh.triangles) {
+    const int n = polygon(t, poly);
+    if (n < 3) continue;
+    if (n == 3) {
+      out.triangles.push_back({index[poly[0]], index[poly[1]], index[poly[2]]});
       continue;
     }
     // A quad: cut along the diagonal that gives the better smallest angle.
-    const std::uint32_t q[4] = {index[p[0]], index[p[1]], index[p[2]], index[p[3]]};
+    const std::uint32_t q[4] = {index[poly[0]], index[poly[1]], index[poly[2]], index[poly[3]]};
     const auto& P = out.positions;
     const double d02 = std::max(min_angle_cos(P[q[0]], P[q[1]], P[q[2]]), min_angle_cos(P[q[0]], P[q[2]], P[q[3]]));
     const double d13 = std::max(min_angle_cos(P[q[0]], P[q[1]], P[q[3]]), min_angle_cos(P[q[1]], P[q[2]], P[q[3]]));
