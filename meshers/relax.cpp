@@ -82,11 +82,23 @@ void slide_along_creases(TriangleMesh& mesh, std::span<const std::uint8_t> chose
 // The intersecting pairs among the triangles `take` accepts, as indices in `mesh`.
 template <class Take>
 std::vector<std::array<std::uint32_t, 2>> intersections_among(const TriangleMesh& mesh, Take take) {
+  // The taken triangles with their own vertices only (renumbered in order: which corners are
+  // shared is what the search reads, not the numbers).
   TriangleMesh near;
-  std::vector<std::uint32_t> source;
-  near.positions = mesh.positions;  // unused vertices cost nothing to the search
+  std::vector<std::uint32_t> source, vertex(mesh.positions.size(), ~0u);
   for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t)
-    if (take(t)) near.triangles.push_back(mesh.triangles[t]), source.push_back(t);
+    if (take(t)) {
+      glm::uvec3 tri = mesh.triangles[t];
+      for (int k = 0; k < 3; ++k) {
+        if (vertex[tri[k]] == ~0u) {
+          vertex[tri[k]] = std::uint32_t(near.positions.size());
+          near.positions.push_back(mesh.positions[tri[k]]);
+        }
+        tri[k] = vertex[tri[k]];
+      }
+      near.triangles.push_back(tri);
+      source.push_back(t);
+    }
   std::vector<std::array<std::uint32_t, 2>> pairs = find_self_intersections(near, std::size_t(-1)).examples;
   for (auto& p : pairs) p = {source[p[0]], source[p[1]]};
   return pairs;
