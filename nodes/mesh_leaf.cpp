@@ -127,18 +127,24 @@ void MeshLeaf::Accel::compute_normals(const std::vector<glm::dvec3>& pos, const 
     slot[order[s]] = static_cast<std::uint32_t>(s);
   });
   std::vector<std::uint32_t>().swap(order);
-  std::vector<glm::dvec3> corner_normal(3 * tris.size());  // angle * face normal at each corner
-  tbb::parallel_for(std::size_t(0), tris.size(), [&](std::size_t t) {
-    const glm::dvec3 p[3] = {pos[tris[t][0]], pos[tris[t][1]], pos[tris[t][2]]};
-    const glm::dvec3& n = face_normal(static_cast<std::uint32_t>(t));
-    for (int k = 0; k < 3; ++k) {
-      const glm::dvec3 e1 = p[(k + 1) % 3] - p[k], e2 = p[(k + 2) % 3] - p[k];
-      corner_normal[3 * t + std::size_t(k)] = std::atan2(glm::length(glm::cross(e1, e2)), glm::dot(e1, e2)) * n;
-    }
-  });
+  // The corners' angle-weighted normals are made in parallel a block of triangles at a time and
+  // added up in triangle order (a block, not the whole mesh's, held at once).
+  constexpr std::size_t kBlock = 8192;
+  std::vector<glm::dvec3> corner_normal(3 * std::min(kBlock, tris.size()));  // angle * face normal
   vertex_normal.assign(pos.size(), glm::dvec3(0.0));
-  for (std::size_t t = 0; t < tris.size(); ++t)
-    for (int k = 0; k < 3; ++k) vertex_normal[tris[t][k]] += corner_normal[3 * t + std::size_t(k)];
+  for (std::size_t b = 0; b < tris.size(); b += kBlock) {
+    const std::size_t e = std::min(tris.size(), b + kBlock);
+    tbb::parallel_for(b, e, [&](std::size_t t) {
+      const glm::dvec3 p[3] = {pos[tris[t][0]], pos[tris[t][1]], pos[tris[t][2]]};
+      const glm::dvec3& n = face_normal(static_cast<std::uint32_t>(t));
+      for (int k = 0; k < 3; ++k) {
+        const glm::dvec3 e1 = p[(k + 1) % 3] - p[k], e2 = p[(k + 2) % 3] - p[k];
+        corner_normal[3 * (t - b) + std::size_t(k)] = std::atan2(glm::length(glm::cross(e1, e2)), glm::dot(e1, e2)) * n;
+      }
+    });
+    for (std::size_t t = b; t < e; ++t)
+      for (int k = 0; k < 3; ++k) vertex_normal[tris[t][k]] += corner_normal[3 * (t - b) + std::size_t(k)];
+  }
   // A vertex where shells (or two cones of one shell) touch has several fans of triangles; its
   // summed pseudo-normal means nothing, so queries nearest to it use the ray-parity test.
   std::vector<std::uint32_t> incident(pos.size(), 0), first(pos.size(), kNone);
