@@ -132,7 +132,7 @@ const Input& input() {
 // --- HybridTree ------------------------------------------------------------------------------
 
 struct Meshed {
-  TriangleMesh mesh;
+  std::shared_ptr<const TriangleMesh> mesh;  ///< the result as mesh_tree hands it over (no copy)
   std::string how;  ///< the root job's strategy and reason
 };
 
@@ -150,7 +150,7 @@ Meshed run_hybridtree(const PeerScene& s, int side, double h, const Input& in) {
   o.strategy = side == kAuto ? MeshStrategy::Auto : MeshStrategy::Global;
   o.polygonize.sharp_features = side != kGlobalSmooth;
   MeshResult r = mesh_tree(tree, o);
-  Meshed out{*r.mesh, {}};
+  Meshed out{r.mesh, {}};
   for (const NodeReport& n : r.nodes)
     if (n.node == tree.root())
       out.how = std::string(to_string(n.strategy)) + " (" + to_string(n.reason) +
@@ -334,7 +334,7 @@ const SideResult& side_result(int scene, int side) {
     r.how = "voxel " + std::to_string(r.voxel);
   } else {
     Meshed m = run_hybridtree(s, side, precision(), input());
-    r.quality = measure(s, m.mesh, margin);
+    r.quality = measure(s, *m.mesh, margin);
     r.how = m.how;
   }
   return cache[{scene, side}] = std::move(r);
@@ -354,7 +354,7 @@ void run_side(int scene, int side, int threads, double voxel) {
     if (side == kVdb)
       benchmark::DoNotOptimize(run_openvdb(s, voxel, input()).triangles.size());
     else
-      benchmark::DoNotOptimize(run_hybridtree(s, side, precision(), input()).mesh.triangles.size());
+      benchmark::DoNotOptimize(run_hybridtree(s, side, precision(), input()).mesh->triangles.size());
   });
 }
 
