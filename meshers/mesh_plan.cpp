@@ -215,7 +215,11 @@ class Runner {
       : tree_(tree), o_(o), owned_budget_(o.polygonize.memory_budget),
         budget_(o.polygonize.budget ? *o.polygonize.budget : owned_budget_), graph_(tree.graph_ptr()),
         jobs_(std::move(jobs)), meshes_(jobs_.size()), reports_(jobs_.size()), errors_(jobs_.size()),
-        leaves_(jobs_.size()) {
+        leaves_(jobs_.size()), consumers_(new std::atomic<std::uint32_t>[jobs_.size()]) {
+    for (std::uint32_t j = 0; j < jobs_.size(); ++j) consumers_[j] = 0;
+    held_.assign(jobs_.size(), 0);
+    for (const Job& job : jobs_)
+      for (std::uint32_t d : job.deps) ++consumers_[d];
     if (o_.cache && !o_.polygonize.brick_filter) compute_keys();
     // The mesh leaves are held for the whole run.
     for (const auto& leaf : graph_->meshes)
@@ -267,6 +271,9 @@ class Runner {
   std::vector<std::uint64_t> keys_;
   std::vector<std::uint8_t> cacheable_;
   std::atomic<std::size_t> done_{0};
+  // Jobs still to read each job's mesh: at zero the mesh is dropped (the root's never is).
+  std::unique_ptr<std::atomic<std::uint32_t>[]> consumers_;
+  std::vector<std::size_t> held_;  // bytes taken from the budget for each job's mesh
   double reported_ = 0.0;
 };
 
@@ -302,13 +309,22 @@ void Runner::run(std::uint32_t j) {
       if (!cacheable_.empty() && cacheable_[j] == 1) o_.cache->insert(keys_[j], CachedJob{meshes_[j], r});
     }
     r.triangles = meshes_[j]->triangles.size();
-    // A job's mesh is held until the run ends; a shared leaf's is the leaf's own, counted above.
-    if (job.strategy != JobStrategy::SharedLeaf)
-      budget_.take(24.0 * double(meshes_[j]->positions.size()) + 12.0 * double(r.triangles),
-                   "the mesh of node " + graph_->label(job.node) + " (" + std::to_string(r.triangles) + " triangles)");
+    // A job's mesh is held until the jobs that read it are done (the root's until the run
+    // ends); a shared leaf's is the leaf's own, counted above.
+    if (job.strategy != JobStrategy::SharedLeaf) {
+      const std::size_t bytes = 24 * meshes_[j]->positions.size() + 12 * r.triangles;
+      budget_.take(double(bytes), "the mesh of node " + graph_->label(job.node) + " (" + std::to_string(r.triangles) + " triangles)");
+      held_[j] = bytes;
+    }
   } catch (...) {
     errors_[j] = std::current_exception();
   }
+  for (std::uint32_t d : job.deps)
+    if (consumers_[d].fetch_sub(1) == 1) {  // the last reader: no other job touches meshes_[d] now
+      budget_.give_back(held_[d]);
+      held_[d] = 0;
+      meshes_[d].reset();
+    }
   r.seconds = since(t0);
   ++done_;
   try {

@@ -90,7 +90,8 @@ struct MeshOptions {
   /// Memory budget, sharp features and vertex refinement of every polygonizer run (precision,
   /// progress and cancel are set from the fields here). The budget is the whole run's: the mesh
   /// leaves, every polygonizer grid and quality pass, and every node mesh the plan keeps take
-  /// from one MemoryBudget (polygonize.budget, else one of polygonize.memory_budget bytes).
+  /// from one MemoryBudget (polygonize.budget, else one of polygonize.memory_budget bytes). A
+  /// node's mesh is dropped and given back once the jobs that read it are done (not the root's).
   PolygonizeOptions polygonize;
   /// The fraction of the work done, non-decreasing, ending at 1. Calls are serialized but may
   /// come from any thread.

@@ -211,6 +211,26 @@ TEST(MeshPlan, EveryStageTakesFromOneMemoryBudget) {
   }
 }
 
+// A job's mesh is held only until the jobs that read it are done: after a run with several
+// jobs (a blob meshed, moved, and united with a mesh leaf), the budget holds the leaf and the
+// root's mesh alone, while its peak held the intermediate meshes too.
+TEST(MeshPlan, IntermediateMeshesAreGivenBackOnceRead) {
+  Builder b(kT);
+  const auto leaf = MeshLeaf::load(test::cgal_mesh("eight.off"));
+  const NodeId blob = b.blend({b.point({0, 0, 0}, {0.6}), b.point({0.4, 0, 0}, {0.6})});
+  const Tree t = b.build(b.unite({b.mesh(leaf, {0.05}), b.affine(blob, glm::translate(glm::dmat4(1.0), dvec3(0.9, 0, 0)))}));
+  MemoryBudget budget(std::size_t(8) << 30);
+  MeshOptions o = at(0.03);
+  o.polygonize.budget = &budget;
+  const MeshResult r = mesh_tree(t, o);
+  std::size_t jobs = 0;
+  for (const NodeReport& n : r.nodes) jobs += n.strategy != JobStrategy::SharedLeaf;
+  ASSERT_GE(jobs, 3u);  // the blob, its move and the union at least
+  const std::size_t root = 24 * r.mesh->positions.size() + 12 * r.mesh->triangles.size();
+  EXPECT_EQ(budget.in_use(), leaf->bytes() + root);
+  EXPECT_GT(budget.peak(), leaf->bytes() + root);
+}
+
 TEST(MeshPlan, MemoryBudgetCountsAndRefuses) {
   MemoryBudget b(1000);
   b.take(600, "a");
