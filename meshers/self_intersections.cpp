@@ -183,6 +183,20 @@ int side(const Tri& t, const dvec3& q) {
   return d > c ? t.sign : d < c ? -t.sign : 0;  // exact: comparisons
 }
 
+/// What a search keeps of each triangle between its tests (3 bytes, where a Tri copies its
+/// corners: 88): the Tri's axis, sign and flat coordinate, computed once.
+struct Shape {
+  std::int8_t axis = -1, sign = 0, flat = -1;
+};
+
+/// Triangle t with the shape computed before: its corners read from the mesh.
+Tri tri_of(const TriangleMesh& mesh, std::uint32_t t, const Shape& shape) {
+  Tri r;
+  for (int k = 0; k < 3; ++k) r.v[k] = mesh.positions[mesh.triangles[t][k]];
+  r.axis = shape.axis, r.sign = shape.sign, r.flat = shape.flat;
+  return r;
+}
+
 /// The triangle, with the axis to drop for 2D tests: the largest normal component first, and
 /// the first one whose projection is exactly non-degenerate.
 Tri make_tri(const TriangleMesh& mesh, std::uint32_t t) {
@@ -362,7 +376,8 @@ bool boxes_overlap(const Tri& a, const Tri& b) {
 using PairLists = tbb::enumerable_thread_specific<std::vector<std::uint64_t>>;  // (i << 32) | j, i < j
 
 struct Collector {
-  const std::vector<Tri>* tris;
+  const TriangleMesh* mesh;
+  const std::vector<Shape>* shapes;
   PairLists found;
 };
 
@@ -378,12 +393,12 @@ void bounds_of(const RTCBoundsFunctionArguments* args) {
 void on_collide(void* user, RTCCollision* hits, unsigned int n) {
   auto& c = *static_cast<Collector*>(user);
   auto& out = c.found.local();
-  const auto& T = *c.tris;
+  const auto& S = *c.shapes;
   for (unsigned int k = 0; k < n; ++k) {
     std::uint32_t i = hits[k].primID0, j = hits[k].primID1;
     if (i == j) continue;
     if (i > j) std::swap(i, j);
-    if (T[i].axis < 0 || T[j].axis < 0 || !boxes_overlap(T[i], T[j])) continue;
+    if (S[i].axis < 0 || S[j].axis < 0 || !boxes_overlap(tri_of(*c.mesh, i, S[i]), tri_of(*c.mesh, j, S[j]))) continue;
     out.push_back(std::uint64_t(i) << 32 | j);
   }
 }
@@ -415,15 +430,17 @@ void check_embree(RTCDevice device, const char* what) {
 
 /// The pairs i < j of non-degenerate triangles whose boxes overlap, bucketed by i, from Embree's
 /// self-collision of a box hierarchy.
-Buckets hierarchy_pairs(const std::vector<Tri>& tris) {
+Buckets hierarchy_pairs(const TriangleMesh& mesh, const std::vector<Shape>& shapes) {
   std::unique_ptr<RTCDeviceTy, decltype(&rtcReleaseDevice)> device(rtcNewDevice(nullptr), rtcReleaseDevice);
   if (!device) throw std::runtime_error("find_self_intersections: cannot create an Embree device");
-  std::vector<RTCBounds> boxes(tris.size());
-  tbb::parallel_for(std::size_t(0), tris.size(), [&](std::size_t t) { boxes[t] = float_box(tris[t]); });
+  std::vector<RTCBounds> boxes(shapes.size());
+  tbb::parallel_for(std::size_t(0), shapes.size(), [&](std::size_t t) {
+    boxes[t] = float_box(tri_of(mesh, static_cast<std::uint32_t>(t), shapes[t]));
+  });
   std::unique_ptr<RTCSceneTy, decltype(&rtcReleaseScene)> scene(rtcNewScene(device.get()), rtcReleaseScene);
   RTCGeometry geom = scene ? rtcNewGeometry(device.get(), RTC_GEOMETRY_TYPE_USER) : nullptr;
   if (!geom) throw std::runtime_error("find_self_intersections: Embree could not create its scene");
-  rtcSetGeometryUserPrimitiveCount(geom, static_cast<unsigned int>(tris.size()));
+  rtcSetGeometryUserPrimitiveCount(geom, static_cast<unsigned int>(shapes.size()));
   rtcSetGeometryUserData(geom, boxes.data());
   rtcSetGeometryBoundsFunction(geom, bounds_of, nullptr);
   rtcCommitGeometry(geom);
@@ -432,10 +449,10 @@ Buckets hierarchy_pairs(const std::vector<Tri>& tris) {
   rtcSetSceneBuildQuality(scene.get(), RTC_BUILD_QUALITY_LOW);  // a Morton build: quick, good enough here
   rtcCommitScene(scene.get());
   check_embree(device.get(), "build its box hierarchy");
-  Collector c{&tris, {}};
+  Collector c{&mesh, &shapes, {}};
   rtcCollide(scene.get(), scene.get(), on_collide, &c);
   check_embree(device.get(), "collide the boxes");
-  return bucket_pairs(c.found, tris.size());
+  return bucket_pairs(c.found, shapes.size());
 }
 
 /// The intersecting pairs (i << 32 | j, i < j) in increasing order, from a uniform grid's
@@ -443,21 +460,22 @@ Buckets hierarchy_pairs(const std::vector<Tri>& tris) {
 /// (meshers/box_pairs.hpp: no hierarchy to build, no candidate stored: on the quality pass's
 /// 81k-triangle snake the grid took 29 ms against the hierarchy's 72); nullopt when the grid
 /// declines.
-std::optional<std::vector<std::uint64_t>> grid_hits(const TriangleMesh& mesh, const std::vector<Tri>& tris) {
-  std::vector<dvec3> lo(tris.size()), hi(tris.size());
-  std::vector<std::uint8_t> skip(tris.size());
-  tbb::parallel_for(std::size_t(0), tris.size(), [&](std::size_t t) {
-    const Tri& r = tris[t];
-    lo[t] = glm::min(r.v[0], glm::min(r.v[1], r.v[2])), hi[t] = glm::max(r.v[0], glm::max(r.v[1], r.v[2]));
-    skip[t] = r.axis < 0;
-  });
+std::optional<std::vector<std::uint64_t>> grid_hits(const TriangleMesh& mesh, const std::vector<Shape>& shapes) {
+  const auto& P = mesh.positions;
   const auto& T = mesh.triangles;
+  std::vector<dvec3> lo(T.size()), hi(T.size());
+  std::vector<std::uint8_t> skip(T.size());
+  tbb::parallel_for(std::size_t(0), T.size(), [&](std::size_t t) {
+    const dvec3 a = P[T[t][0]], b = P[T[t][1]], c = P[T[t][2]];
+    lo[t] = glm::min(a, glm::min(b, c)), hi[t] = glm::max(a, glm::max(b, c));
+    skip[t] = shapes[t].axis < 0;
+  });
   tbb::enumerable_thread_specific<std::vector<std::uint64_t>> found;
   const bool gridded = grid_box_pairs(lo, hi, skip, [&](std::span<const std::uint64_t> batch) {
     auto& out = found.local();
     for (const std::uint64_t p : batch) {
       const auto i = static_cast<std::uint32_t>(p >> 32), j = static_cast<std::uint32_t>(p);
-      if (pair_intersects(tris[i], T[i], tris[j], T[j])) out.push_back(p);
+      if (pair_intersects(tri_of(mesh, i, shapes[i]), T[i], tri_of(mesh, j, shapes[j]), T[j])) out.push_back(p);
     }
   });
   if (!gridded) return std::nullopt;
@@ -469,7 +487,7 @@ std::optional<std::vector<std::uint64_t>> grid_hits(const TriangleMesh& mesh, co
 
 /// Each bucket i sorted and deduplicated, then the j that intersect i moved to its front, in
 /// order; returns how many there are per bucket.
-std::vector<std::uint32_t> test_buckets(const TriangleMesh& mesh, const std::vector<Tri>& tris, Buckets& cand) {
+std::vector<std::uint32_t> test_buckets(const TriangleMesh& mesh, const std::vector<Shape>& shapes, Buckets& cand) {
   const auto& T = mesh.triangles;
   std::vector<std::uint32_t> hits(T.size(), 0);
   tbb::parallel_for(tbb::blocked_range<std::size_t>(0, T.size()), [&](const tbb::blocked_range<std::size_t>& range) {
@@ -478,8 +496,9 @@ std::vector<std::uint32_t> test_buckets(const TriangleMesh& mesh, const std::vec
       const auto e = cand.second.begin() + std::ptrdiff_t(cand.start[i + 1]);
       std::sort(b, e);
       auto out = b;
+      const Tri ti = tri_of(mesh, static_cast<std::uint32_t>(i), shapes[i]);
       for (auto it = b, last = std::unique(b, e); it != last; ++it)
-        if (pair_intersects(tris[i], T[i], tris[*it], T[*it])) *out++ = *it;
+        if (pair_intersects(ti, T[i], tri_of(mesh, *it, shapes[*it]), T[*it])) *out++ = *it;
       hits[i] = static_cast<std::uint32_t>(out - b);
     }
   });
@@ -497,17 +516,19 @@ SelfIntersections find_self_intersections(const TriangleMesh& mesh, std::size_t 
   SelfIntersections r;
   const auto& T = mesh.triangles;
   if (T.size() < 2) return r;
-  std::vector<Tri> tris(T.size());
-  tbb::parallel_for(std::size_t(0), T.size(),
-                    [&](std::size_t t) { tris[t] = make_tri(mesh, static_cast<std::uint32_t>(t)); });
-  if (const auto found = grid_hits(mesh, tris)) {
+  std::vector<Shape> shapes(T.size());
+  tbb::parallel_for(std::size_t(0), T.size(), [&](std::size_t t) {
+    const Tri tri = make_tri(mesh, static_cast<std::uint32_t>(t));
+    shapes[t] = {static_cast<std::int8_t>(tri.axis), static_cast<std::int8_t>(tri.sign), static_cast<std::int8_t>(tri.flat)};
+  });
+  if (const auto found = grid_hits(mesh, shapes)) {
     r.pairs = found->size();
     for (std::size_t k = 0; k < found->size() && k < max_examples; ++k)
       r.examples.push_back({static_cast<std::uint32_t>((*found)[k] >> 32), static_cast<std::uint32_t>((*found)[k])});
     return r;
   }
-  Buckets cand = hierarchy_pairs(tris);
-  const std::vector<std::uint32_t> hits = test_buckets(mesh, tris, cand);
+  Buckets cand = hierarchy_pairs(mesh, shapes);
+  const std::vector<std::uint32_t> hits = test_buckets(mesh, shapes, cand);
   for (std::size_t i = 0; i < T.size(); ++i) {
     r.pairs += hits[i];
     for (std::uint32_t k = 0; k < hits[i] && r.examples.size() < max_examples; ++k)
