@@ -83,22 +83,29 @@ void slide_along_creases(TriangleMesh& mesh, std::span<const std::uint8_t> chose
 template <class Take>
 std::vector<std::array<std::uint32_t, 2>> intersections_among(const TriangleMesh& mesh, Take take) {
   // The taken triangles with their own vertices only (renumbered in order: which corners are
-  // shared is what the search reads, not the numbers).
+  // shared is what the search reads, not the numbers), counted first to size the arrays.
   TriangleMesh near;
   std::vector<std::uint32_t> source, vertex(mesh.positions.size(), ~0u);
+  std::size_t used = 0;
   for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t)
     if (take(t)) {
-      glm::uvec3 tri = mesh.triangles[t];
-      for (int k = 0; k < 3; ++k) {
-        if (vertex[tri[k]] == ~0u) {
-          vertex[tri[k]] = std::uint32_t(near.positions.size());
-          near.positions.push_back(mesh.positions[tri[k]]);
-        }
-        tri[k] = vertex[tri[k]];
-      }
-      near.triangles.push_back(tri);
       source.push_back(t);
+      for (int k = 0; k < 3; ++k) used += vertex[mesh.triangles[t][k]] == ~0u, vertex[mesh.triangles[t][k]] = 0;
     }
+  std::fill(vertex.begin(), vertex.end(), ~0u);
+  near.positions.reserve(used);
+  near.triangles.reserve(source.size());
+  for (const std::uint32_t t : source) {
+    glm::uvec3 tri = mesh.triangles[t];
+    for (int k = 0; k < 3; ++k) {
+      if (vertex[tri[k]] == ~0u) {
+        vertex[tri[k]] = std::uint32_t(near.positions.size());
+        near.positions.push_back(mesh.positions[tri[k]]);
+      }
+      tri[k] = vertex[tri[k]];
+    }
+    near.triangles.push_back(tri);
+  }
   std::vector<std::array<std::uint32_t, 2>> pairs = find_self_intersections(near, std::size_t(-1)).examples;
   for (auto& p : pairs) p = {source[p[0]], source[p[1]]};
   return pairs;
