@@ -547,7 +547,12 @@ TriangleMesh polygonize(std::shared_ptr<const Graph> graph, NodeId root, double 
 
   // 4. One vertex per edge key across bricks, then vertices a hair from grid points merged.
   t0 = std::chrono::steady_clock::now();
+  // What the bricks made is one mesh now: their outputs, values and cache entries are let go
+  // before the passes that follow hold their own working sets.
   std::vector<EdgeVertex> all = brick::join_bricks(outputs, mesh);
+  std::vector<BrickOutput>().swap(outputs);
+  std::vector<float>().swap(values);
+  std::vector<std::shared_ptr<const brick::KeptBrick>>().swap(kept);
   std::vector<glm::vec3> normals(all.size());
   for (std::size_t i = 0; i < all.size(); ++i) normals[i] = all[i].normal;
   RootField root_field{graph, root, T, nullptr};
@@ -556,6 +561,7 @@ TriangleMesh polygonize(std::shared_ptr<const Graph> graph, NodeId root, double 
   for (std::size_t a = 0; a < active.size(); ++a) field.adopt(grid.brick_at(active[a]), tapes[a]);
   std::vector<std::uint8_t> on_crease;  // snapped vertices put on a crease, then the crease step's points
   if (options.snap) snap_phase(grid, all, options.features, field, mesh, normals, on_crease, stats);
+  std::vector<EdgeVertex>().swap(all);
   stats.seconds_merge = seconds_since(t0);
 
   // 5. Creases: split the edges that cross them (meshers/features.hpp), untangle, unfold.
