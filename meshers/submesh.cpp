@@ -177,7 +177,11 @@ void put_back(TriangleMesh& mesh, const Pieces& pieces, std::span<const Triangle
               std::span<const std::vector<std::uint32_t>> origin, std::vector<std::uint32_t>* renumber) {
   const std::size_t old_count = mesh.positions.size();
   std::vector<glm::dvec3> positions = std::move(mesh.positions);
-  std::vector<glm::uvec3> triangles = pieces.rest;
+  std::vector<glm::uvec3> triangles;
+  std::size_t added = 0;
+  for (const TriangleMesh& c : changed) added += c.triangles.size();
+  triangles.reserve(pieces.rest.size() + added);
+  triangles.assign(pieces.rest.begin(), pieces.rest.end());
   for (std::size_t i = 0; i < changed.size(); ++i) {
     std::vector<std::uint32_t> index(changed[i].positions.size());
     for (std::size_t v = 0; v < changed[i].positions.size(); ++v) {
@@ -197,6 +201,7 @@ void put_back(TriangleMesh& mesh, const Pieces& pieces, std::span<const Triangle
   for (const glm::uvec3& t : triangles)
     for (int k = 0; k < 3; ++k) slot[t[k]] = 0;
   mesh.positions.clear();
+  mesh.positions.reserve(std::size_t(std::count_if(slot.begin(), slot.end(), [](std::uint32_t x) { return x != ~0u; })));
   for (std::uint32_t v = 0; v < positions.size(); ++v)
     if (slot[v] != ~0u) slot[v] = std::uint32_t(mesh.positions.size()), mesh.positions.push_back(positions[v]);
   mesh.triangles.clear();
