@@ -1,7 +1,7 @@
 // The boundary of a triangle mesh in linear time: the edges that exactly one triangle uses, found
 // by filing each side under its lower vertex (a counting sort) instead of sorting them all. The
 // local strategies call it on whole operand meshes, where a sort would dominate; its scratch is
-// four bytes a side.
+// eight bytes a side and four a vertex.
 #pragma once
 
 #include "meshers/triangle_mesh.hpp"
