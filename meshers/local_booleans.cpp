@@ -19,18 +19,13 @@ namespace {
 
 // An operand of one Boolean step: its mesh, its field, where that field may be non-zero, and the
 // tape that projects the vertices its refinement adds (the operand's own; none for the result of
-// earlier steps, whose refinement splits at midpoints: no single surface is its own).
-// An operand straight from a child job keeps no copy of its mesh between cuts: `mesh` is made
-// from `source` and the refinements so far when a cut needs it, and dropped after, so that the
-// stitch and the search after it do not hold a refined copy of a big operand (a mesh leaf's
-// whole triangle set) beside their own.
+// earlier steps, whose refinement splits at midpoints: no single surface is its own). An operand
+// straight from a child job refines that job's mesh without copying it between cuts
+// (RefinedMesh).
 struct BooleanOperand {
-  TriangleMesh mesh;
+  RefinedMesh shape;
   BatchField field;
   Aabb support;
-  std::shared_ptr<const TapeEvaluator> surface;
-  const TriangleMesh* source = nullptr;               // the child's mesh; null once `mesh` is a result
-  std::vector<std::pair<Aabb, double>> refinements;  // applied to `source` in turn: region, edge
 };
 
 BatchField shifted(const BatchField& f, double a, double b) {
@@ -51,24 +46,10 @@ TriangleMesh boolean_step(const LocalInput& in, NodeKind kind, BooleanOperand& a
   const bool keep_a_outside = kind != NodeKind::Intersection;
   const bool keep_b_outside = kind == NodeKind::Union;
   const Aabb meet = intersect(a.support, b.support), near = meet.expanded(2.0 * in.precision);
-  auto warp = [&](const BooleanOperand& o, const TriangleMesh& m, const Aabb& region, double edge) {
-    return warp_mesh(m, [](const glm::dvec3& p) { return p; }, o.surface.get(), T, edge, nullptr, &region);
-  };
-  // The operand's refined mesh, made again from its source when it was dropped.
-  auto materialize = [&](BooleanOperand& o) {
-    if (!o.source || !o.mesh.triangles.empty()) return;
-    for (std::size_t r = 0; r < o.refinements.size(); ++r)
-      o.mesh = warp(o, r == 0 ? *o.source : o.mesh, o.refinements[r].first, o.refinements[r].second);
-  };
-  auto refine = [&](BooleanOperand& o, const Aabb& region, double edge) {
-    materialize(o);
-    o.mesh = warp(o, o.source && o.refinements.empty() ? *o.source : o.mesh, region, edge);
-    if (o.source) o.refinements.emplace_back(region, edge);
-  };
+  auto refine = [&](BooleanOperand& o, const Aabb& region, double edge) { o.shape.refine(region, edge); };
   auto cut = [&](BooleanOperand& o, const BatchField& f) {
-    materialize(o);
-    TriangleMesh piece = cut_mesh(o.mesh, f, cut_options(in));
-    if (o.source) o.mesh = TriangleMesh();
+    TriangleMesh piece = cut_mesh(o.shape.mesh(), f, cut_options(in));
+    o.shape.drop();
     return piece;
   };
   double edge = 1.5 * in.precision;
@@ -128,26 +109,21 @@ TriangleMesh trim_boolean(const LocalInput& in, LocalStats* stats) {
   auto operand_of = [&](std::size_t i) {
     const NodeField f(in, c[i], false);
     st.operand_triangles += operand(in, i).triangles.size();
-    return BooleanOperand{{},
-                          [f](std::span<const glm::dvec3> p, std::span<double> v) { f(p, v); },
-                          f.support(),
-                          std::make_shared<const TapeEvaluator>(
-                              std::make_shared<const Tape>(compile_tape(in.graph, c[i], in.threshold))),
-                          &operand(in, i),
-                          {}};
+    return BooleanOperand{RefinedMesh(operand(in, i),
+                                      std::make_shared<const TapeEvaluator>(
+                                          std::make_shared<const Tape>(compile_tape(in.graph, c[i], in.threshold))),
+                                      in.threshold),
+                          [f](std::span<const glm::dvec3> p, std::span<double> v) { f(p, v); }, f.support()};
   };
   BooleanOperand acc = operand_of(0);
   for (std::size_t i = 1; i < c.size(); ++i) {
     BooleanOperand b = operand_of(i);
-    acc.mesh = boolean_step(in, kind, acc, b, *node_field, st);
+    acc.shape = RefinedMesh(boolean_step(in, kind, acc, b, *node_field, st), in.threshold);
     if (st.self_intersections) break;
     fold_into(acc, b, kind, in.threshold);
-    acc.surface = nullptr;
-    acc.source = nullptr;  // its mesh is this step's result now
-    acc.refinements.clear();
   }
   if (stats) *stats = st;
-  return std::move(acc.mesh);
+  return std::move(acc.shape).release();
 }
 
 }  // namespace ht

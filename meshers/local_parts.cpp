@@ -13,6 +13,34 @@
 namespace ht::local {
 
 
+TriangleMesh RefinedMesh::step(const TriangleMesh& from, const Aabb& region, double edge) const {
+  return warp_mesh(from, [](const glm::dvec3& p) { return p; }, surface_.get(), threshold_, edge, nullptr, &region);
+}
+
+const TriangleMesh& RefinedMesh::mesh() {
+  if (!source_ || made_) return mesh_;
+  mesh_ = TriangleMesh();
+  for (std::size_t k = 0; k < steps_.size(); ++k) mesh_ = step(k == 0 ? *source_ : mesh_, steps_[k].first, steps_[k].second);
+  if (steps_.empty()) mesh_ = *source_;
+  made_ = true;
+  return mesh_;
+}
+
+void RefinedMesh::refine(const Aabb& region, double edge) {
+  if (!source_) {
+    mesh_ = step(mesh_, region, edge);
+    return;
+  }
+  mesh_ = step(steps_.empty() ? *source_ : mesh(), region, edge);
+  steps_.emplace_back(region, edge);
+  made_ = true;
+}
+
+TriangleMesh RefinedMesh::release() && {
+  mesh();
+  return std::move(mesh_);
+}
+
 // Cuts snap vertices by at most a tenth of the precision (see CutOptions::snap_distance).
 CutOptions cut_options(const LocalInput& in) {
   CutOptions o;

@@ -78,6 +78,38 @@ std::vector<std::uint8_t> near_seam(const TriangleMesh& mesh, const Aabb& box, s
 /// remeshing reaches. Vertices already there stay bit for bit; the cut is evaluated once at each.
 TriangleMesh refined_and_cut(const TriangleMesh& mesh, const LocalInput& in, NodeId child, const Aabb& region,
                              const BatchField& cut);
+/// A Boolean operand's mesh, refined step by step (edges longer than `edge` split inside
+/// `region`, new vertices projected with `surface`, as warp_mesh does) from a source it does not
+/// copy. Between uses it may be dropped and is then made again by replaying the refinements
+/// (warp_mesh is deterministic: the same bytes), so that a big child's mesh is not held twice
+/// while the pieces are joined and searched. Without a source it owns its mesh (an earlier
+/// step's result, refined at midpoints) and dropping does nothing. Not thread-safe.
+class RefinedMesh {
+ public:
+  /// `source` must outlive this.
+  RefinedMesh(const TriangleMesh& source, std::shared_ptr<const TapeEvaluator> surface, double threshold)
+      : source_(&source), surface_(std::move(surface)), threshold_(threshold) {}
+  RefinedMesh(TriangleMesh owned, double threshold) : threshold_(threshold), mesh_(std::move(owned)) {}
+
+  void refine(const Aabb& region, double edge);
+  /// The mesh after every refinement so far (made again if it was dropped).
+  const TriangleMesh& mesh();
+  void drop() {
+    if (!source_) return;
+    mesh_ = TriangleMesh();
+    made_ = false;
+  }
+  TriangleMesh release() &&;
+
+ private:
+  TriangleMesh step(const TriangleMesh& from, const Aabb& region, double edge) const;
+  const TriangleMesh* source_ = nullptr;
+  std::shared_ptr<const TapeEvaluator> surface_;
+  double threshold_;
+  TriangleMesh mesh_;
+  std::vector<std::pair<Aabb, double>> steps_;  // with a source: region and edge of each refinement
+  bool made_ = false;                           // mesh_ holds every step
+};
 /// Turns every triangle over.
 void flip(TriangleMesh& m);
 bool overlaps(const Aabb& a, const Aabb& b);

@@ -3,7 +3,10 @@
 // with the expected genus; they agree with the global polygonizer (Hausdorff distance within the
 // precision, volume within 1%), keep the untouched mesh-leaf vertices bit for bit, and give the
 // same bytes at any thread count.
+#include "meshers/local_parts.hpp"
 #include "meshers/mesh_checks.hpp"
+#include "meshers/sweep.hpp"
+#include "meshers/warp_mesh.hpp"
 #include "meshers/mesh_plan.hpp"
 #include "nodes/mesh_leaf.hpp"
 #include "runtime/builder.hpp"
@@ -150,6 +153,42 @@ dvec3 face_middle() {
 }
 
 }  // namespace
+
+// A Boolean operand's refined mesh, dropped between cuts and made again by replaying its
+// refinements, is the same mesh byte for byte as refining a kept copy step by step: a coarse
+// sphere refined in two boxes at two edge lengths, dropped before, between and after.
+TEST(LocalBooleans, RefinedOperandsAreMadeAgainExactly) {
+  Builder b(kT);
+  const Tree t = b.build(b.point({0, 0, 0}, {1.0}));
+  const TriangleMesh sphere = sweep_mesh(t.graph(), t.root(), kT, 0.4);
+  const auto surface = std::make_shared<const TapeEvaluator>(std::make_shared<const Tape>(compile_tape(t.graph_ptr(), t.root(), kT)));
+  const Aabb first{{-1, -1, 0}, {1, 1, 1}}, second{{0, -1, -1}, {1, 1, 1}};
+  auto step = [&](const TriangleMesh& m, const Aabb& box, double edge) {
+    return warp_mesh(m, [](const glm::dvec3& p) { return p; }, surface.get(), kT, edge, nullptr, &box);
+  };
+  const TriangleMesh once = step(sphere, first, 0.3), twice = step(once, second, 0.15);
+  ASSERT_GT(once.triangles.size(), sphere.triangles.size());
+  ASSERT_GT(twice.triangles.size(), once.triangles.size());
+  auto same = [](const TriangleMesh& x, const TriangleMesh& y) {
+    return x.triangles == y.triangles && x.positions.size() == y.positions.size() &&
+           std::memcmp(x.positions.data(), y.positions.data(), x.positions.size() * sizeof(glm::dvec3)) == 0;
+  };
+  local::RefinedMesh r(sphere, surface, kT);
+  r.refine(first, 0.3);
+  EXPECT_TRUE(same(r.mesh(), once));
+  r.drop();
+  EXPECT_TRUE(same(r.mesh(), once));
+  r.drop();
+  r.refine(second, 0.15);
+  EXPECT_TRUE(same(r.mesh(), twice));
+  r.drop();
+  EXPECT_TRUE(same(r.mesh(), twice));
+  EXPECT_TRUE(same(std::move(r).release(), twice));
+  // An owned mesh (an earlier step's result) is refined in place and survives a drop.
+  local::RefinedMesh owned(TriangleMesh(once), kT);
+  owned.drop();
+  EXPECT_TRUE(same(owned.mesh(), once));
+}
 
 TEST(LocalBooleans, PrimitivesAndMeshLeaves) {
   const std::vector<Case> cases = {
