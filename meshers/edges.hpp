@@ -1,7 +1,7 @@
 // The boundary of a triangle mesh in linear time: the edges that exactly one triangle uses, found
-// by filing each side under its lower vertex (a counting sort) instead of sorting them all. The
-// local strategies call it on whole operand meshes, where a sort would dominate; its scratch is
-// eight bytes a side and four a vertex.
+// from the sides filed under their lower vertex (nodes/edge_keys.hpp) instead of sorting them all.
+// The local strategies call it on whole operand meshes, where a sort would dominate; its scratch
+// is eight bytes a side and eight a vertex.
 #pragma once
 
 #include "meshers/triangle_mesh.hpp"

@@ -2,6 +2,7 @@
 // per shell (BFS over edges), optional hole filling, then the Embree scene (one geometry per
 // shell), outward orientation of each shell from its nesting depth and signed volume, and the
 // angle-weighted pseudo-normals. The contract is in nodes/mesh_leaf.hpp.
+#include "nodes/edge_keys.hpp"
 #include "nodes/mesh_internal.hpp"
 #include "nodes/trimesh.hpp"  // ~MeshLeaf in shared_ptr's deleter
 #include "nodes/winding.hpp"
@@ -27,42 +28,21 @@ Topology edge_topology(const std::vector<glm::uvec3>& tris) {
   const std::size_t nh = 3 * tris.size();
   topo.nbr.assign(nh, kNone);
   topo.open.assign(nh, 0);
-  // Half-edges filed under their lower vertex as (upper vertex, half-edge) keys, each vertex's
-  // few sorted: the faces of each edge come together without a hash map or a sort of them all,
-  // in face order within an edge, so messages are deterministic. Eight bytes a half-edge.
+  // The half-edges grouped by edge (nodes/edge_keys.hpp): in face order within an edge, so
+  // messages are deterministic.
   std::uint32_t vertices = 0;
   for (const glm::uvec3& t : tris) vertices = std::max({vertices, t[0] + 1, t[1] + 1, t[2] + 1});
-  auto ends = [&](std::uint32_t h) { return std::pair(corner(tris[h / 3], h % 3), corner(tris[h / 3], h % 3 + 1)); };
-  std::vector<std::uint32_t> first(std::size_t(vertices) + 1, 0);
-  for (std::uint32_t h = 0; h < nh; ++h) ++first[std::min(ends(h).first, ends(h).second)];
-  std::uint32_t at = 0;
-  for (std::uint32_t& f : first) at += std::exchange(f, at);  // exclusive prefix sums
-  std::vector<std::uint64_t> key(nh);
-  {
-    std::vector<std::uint32_t> fill(first.begin(), first.end() - 1);
-    for (std::uint32_t h = 0; h < nh; ++h) {
-      const auto [a, b] = ends(h);
-      key[fill[std::min(a, b)]++] = std::uint64_t(std::max(a, b)) << 32 | h;
-    }
-  }
-  for (std::uint32_t v = 0; v < vertices; ++v) {
-    const auto b = key.begin() + first[v], e = key.begin() + first[v + 1];
-    for (auto i = b + (b != e); i < e; ++i) {  // insertion sort: a few half-edges each
-      const std::uint64_t x = *i;
-      auto j = i;
-      for (; j != b && *(j - 1) > x; --j) *j = *(j - 1);
-      *j = x;
-    }
-    for (auto i = b; i != e;) {
-      auto j = i + 1;
-      while (j != e && *j >> 32 == *i >> 32) ++j;
-      const auto h0 = static_cast<std::uint32_t>(*i);
+  const EdgeKeys e = edge_keys(tris, vertices);
+  for (std::uint32_t v = 0; v < vertices; ++v)
+    for (std::size_t i = e.first[v]; i < e.first[v + 1];) {
+      const std::size_t j = e.run_end(v, i);
+      const std::uint32_t h0 = EdgeKeys::side(e.keys[i]);
       if (j - i == 1) {
         ++topo.boundary;
         topo.open[h0] = 1;
         topo.first_boundary = std::min(topo.first_boundary, h0);
       } else if (j - i == 2) {
-        const auto h1 = static_cast<std::uint32_t>(*(i + 1));
+        const std::uint32_t h1 = EdgeKeys::side(e.keys[i + 1]);
         topo.nbr[h0] = h1 / 3;
         topo.nbr[h1] = h0 / 3;
       } else {
@@ -71,7 +51,6 @@ Topology edge_topology(const std::vector<glm::uvec3>& tris) {
       }
       i = j;
     }
-  }
   return topo;
 }
 
