@@ -1,5 +1,6 @@
 #include "meshers/warp_mesh.hpp"
 
+#include "meshers/triangle_shape.hpp"
 #include "nodes/warps.hpp"
 #include "runtime/tape_eval.hpp"
 
@@ -115,9 +116,18 @@ TriangleMesh warp_mesh(const TriangleMesh& child, const std::function<glm::dvec3
           next.push_back({a, mab, c});
           next.push_back({mab, b, c});
         } else {
+          // The quad a, mab, mbc, c takes the diagonal that leaves its thinner triangle less
+          // thin (a projected midpoint can put one diagonal almost along a side).
           next.push_back({mab, b, mbc});
-          next.push_back({a, mab, mbc});
-          next.push_back({a, mbc, c});
+          const double by_a = std::max(thinness(world[a], world[mab], world[mbc]), thinness(world[a], world[mbc], world[c]));
+          const double by_c = std::max(thinness(world[a], world[mab], world[c]), thinness(world[mab], world[mbc], world[c]));
+          if (by_c < by_a) {
+            next.push_back({a, mab, c});
+            next.push_back({mab, mbc, c});
+          } else {
+            next.push_back({a, mab, mbc});
+            next.push_back({a, mbc, c});
+          }
         }
       }
     }

@@ -4,7 +4,8 @@
 // target: the new vertex is the midpoint in the child's space, projected onto the child's
 // surface by Newton steps on the child's field, then warped, so it lies on the warped surface
 // too. Splits use red-green templates (a triangle with 1, 2 or 3 split edges becomes 2, 3 or 4
-// triangles, orientation kept), so a closed manifold stays a closed manifold.
+// triangles, orientation kept; with 2, the quad beside the corner triangle takes the diagonal
+// that leaves its thinner half less thin), so a closed manifold stays a closed manifold.
 #pragma once
 
 #include "meshers/triangle_mesh.hpp"
