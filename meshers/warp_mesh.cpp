@@ -83,22 +83,37 @@ TriangleMesh warp_mesh(const TriangleMesh& child, const std::function<glm::dvec3
     if (field) project(mids, *field, T);
     std::unordered_map<std::uint64_t, std::uint32_t> mid_of;
     mid_of.reserve(long_edges.size() * 2);
+    // Sized exactly (an insert past the capacity doubles it): the result is held as long as
+    // the operand it refines.
     const std::size_t first = local.size();
+    local.reserve(first + mids.size());
     local.insert(local.end(), mids.begin(), mids.end());
+    world.reserve(local.size());
     world.resize(local.size());
     tbb::parallel_for(std::size_t(0), mids.size(), [&](std::size_t i) { world[first + i] = warp(mids[i]); });
     for (std::size_t i = 0; i < long_edges.size(); ++i) mid_of.emplace(long_edges[i], static_cast<std::uint32_t>(first + i));
     // Red-green refinement, orientation kept: rotate each triangle so its split edges come first.
-    std::vector<glm::uvec3> next;
-    next.reserve(tris.size() * 2);
-    for (const auto& t : tris) {
-      std::array<std::uint32_t, 3> m;
+    // The triangles with a split edge are few: those without a split end skip the lookups. A
+    // triangle with c split edges becomes c + 1, counted first so the result is sized exactly.
+    std::vector<std::uint8_t> split_end(local.size(), 0);
+    for (const std::uint64_t e : long_edges) split_end[e >> 32] = split_end[e & 0xffffffffu] = 1;
+    auto midpoints = [&](const glm::uvec3& t, std::array<std::uint32_t, 3>& m) {
+      m = {kNone, kNone, kNone};
+      if (!(split_end[t[0]] | split_end[t[1]] | split_end[t[2]])) return 0;
       int count = 0;
       for (int k = 0; k < 3; ++k) {
         const auto it = mid_of.find(edge_key(t[k], t[(k + 1) % 3]));
-        m[k] = it == mid_of.end() ? kNone : it->second;
-        count += it == mid_of.end() ? 0 : 1;
+        if (it != mid_of.end()) m[std::size_t(k)] = it->second, ++count;
       }
+      return count;
+    };
+    std::size_t made = 0;
+    std::array<std::uint32_t, 3> m;
+    for (const glm::uvec3& t : tris) made += std::size_t(midpoints(t, m)) + 1;
+    std::vector<glm::uvec3> next;
+    next.reserve(made);
+    for (const glm::uvec3& t : tris) {
+      const int count = midpoints(t, m);
       if (count == 0) {
         next.push_back(t);
       } else if (count == 3) {
