@@ -1,10 +1,10 @@
 #include "meshers/mesh_checks.hpp"
 
-#include "meshers/edge_sides.hpp"
 #include "meshers/union_find.hpp"
 
 #include "meshers/self_intersections.hpp"
 #include "meshers/surface_field.hpp"
+#include "nodes/edge_keys.hpp"
 #include "nodes/mesh_leaf.hpp"
 #include "nodes/warps.hpp"
 #include "runtime/graph.hpp"
@@ -50,49 +50,53 @@ std::pair<double, double> min_and_p1(std::vector<float>& angles) {
 }
 
 
-// The sides cut into about `pieces` ranges of whole edges (each range starts where an edge's
-// run does), for the parallel passes below.
-std::vector<std::size_t> edge_ranges(const std::vector<Side>& he, std::size_t pieces) {
-  std::vector<std::size_t> at{0};
-  for (std::size_t k = 1; k < pieces; ++k) {
-    std::size_t i = std::max(at.back(), he.size() * k / pieces);
-    while (i > 0 && i < he.size() && he[i].lo == he[i - 1].lo && he[i].hi == he[i - 1].hi) ++i;
-    if (i > at.back() && i < he.size()) at.push_back(i);
-  }
-  at.push_back(he.size());
-  return at;
+// Each edge's sides (one run of a vertex's keys: meshers' EdgeKeys file every edge under its lower
+// vertex) as f(v, keys), for the vertices in [from, to).
+template <class F>
+void for_each_edge(const EdgeKeys& e, std::size_t from, std::size_t to, F&& f) {
+  for (std::size_t v = from; v < to; ++v)
+    for (std::size_t i = e.first[v]; i < e.first[v + 1];) {
+      const std::size_t j = e.run_end(std::uint32_t(v), i);
+      f(std::uint32_t(v), std::span(e.keys).subspan(i, j - i));
+      i = j;
+    }
 }
 
 // Edges by use and direction; vertex fans; with `tris`, the triangles joined across each edge
-// into components. Ranges of whole edges run in parallel, their counts summed in range order,
-// their unions into sets whose representatives (each set's smallest member) do not depend on
-// the order (meshers/union_find.hpp ConcurrentUnionFind).
+// into components. Blocks of vertices (whole edges each) run in parallel, their counts summed in
+// block order, their unions into sets whose representatives (each set's smallest member) do not
+// depend on the order (meshers/union_find.hpp ConcurrentUnionFind).
 //
 // Vertex fans: the triangles around a vertex, linked through the edges at the vertex, must form
 // one group. Each triangle's corner stands for the triangle at that vertex; the sides of an edge
 // join their corners at each end, so each group of corners left is one fan.
-void edge_and_fan_census(const std::vector<glm::uvec3>& T, const std::vector<Side>& he, std::size_t vertices,
+void edge_and_fan_census(const std::vector<glm::uvec3>& T, const EdgeKeys& ek, std::size_t vertices,
                          ConcurrentUnionFind* tris, MeshChecks& c) {
   ConcurrentUnionFind corners(3 * T.size());
-  // The corner of a side's triangle at its lower (or upper) vertex.
-  auto at = [](const Side& s, bool lower) { return 3 * s.tri + ((s.forward == lower) ? s.corner : (s.corner + 1) % 3); };
-  const std::vector<std::size_t> ranges = edge_ranges(he, 64);
-  std::vector<std::array<std::size_t, 4>> counts(ranges.size() - 1, {0, 0, 0, 0});
-  tbb::parallel_for(std::size_t(0), ranges.size() - 1, [&](std::size_t r) {
-    std::array<std::size_t, 4>& k = counts[r];
-    for_each_edge(std::span(he).subspan(ranges[r], ranges[r + 1] - ranges[r]), [&](std::span<const Side> run) {
+  // Side s runs from corner s % 3 of triangle s / 3 to the next; forward when it starts at `lo`.
+  auto forward = [&](std::uint64_t key, std::uint32_t lo) { const std::uint32_t s = EdgeKeys::side(key); return T[s / 3][s % 3] == lo; };
+  // The corner of a side's triangle at the edge's lower (or upper) vertex.
+  auto at = [&](std::uint64_t key, std::uint32_t lo, bool lower) {
+    const std::uint32_t s = EdgeKeys::side(key);
+    return 3 * (s / 3) + (forward(key, lo) == lower ? s % 3 : (s % 3 + 1) % 3);
+  };
+  constexpr std::size_t kBlocks = 64;
+  std::vector<std::array<std::size_t, 4>> counts(kBlocks, {0, 0, 0, 0});
+  tbb::parallel_for(std::size_t(0), kBlocks, [&](std::size_t block) {
+    std::array<std::size_t, 4>& k = counts[block];
+    for_each_edge(ek, vertices * block / kBlocks, vertices * (block + 1) / kBlocks, [&](std::uint32_t lo, std::span<const std::uint64_t> run) {
       ++k[0];
       if (run.size() == 1) ++k[1];
       if (run.size() > 2) ++k[2];
-      if (run.size() == 2 && run[0].forward == run[1].forward) ++k[3];
+      if (run.size() == 2 && forward(run[0], lo) == forward(run[1], lo)) ++k[3];
       if (tris)
-        for (const Side& side : run.subspan(1)) tris->unite(run[0].tri, side.tri);
+        for (const std::uint64_t side : run.subspan(1)) tris->unite(EdgeKeys::side(run[0]) / 3, EdgeKeys::side(side) / 3);
       // A side from a vertex to itself links nothing: a triangle naming v twice beside w has both
       // its corners at v on the edge vw, and one naming v thrice shares no other vertex.
-      if (run[0].lo == run[0].hi) return;
+      if (EdgeKeys::upper(run[0]) == lo) return;
       for (std::size_t i = 1; i < run.size(); ++i) {
-        corners.unite(at(run[i - 1], true), at(run[i], true));
-        corners.unite(at(run[i - 1], false), at(run[i], false));
+        corners.unite(at(run[i - 1], lo, true), at(run[i], lo, true));
+        corners.unite(at(run[i - 1], lo, false), at(run[i], lo, false));
       }
     });
   });
@@ -117,7 +121,7 @@ void edge_and_fan_census(const std::vector<glm::uvec3>& T, const std::vector<Sid
 }
 
 // Components, Euler characteristic and genus.
-void component_census(const std::vector<glm::uvec3>& T, const std::vector<Side>& he, ConcurrentUnionFind& tris,
+void component_census(const std::vector<glm::uvec3>& T, const EdgeKeys& ek, ConcurrentUnionFind& tris,
                       const std::vector<std::uint32_t>& start, const std::vector<std::uint32_t>& incident,
                       MeshChecks& c) {
   std::vector<long> comp_v, comp_e, comp_f;
@@ -136,7 +140,8 @@ void component_census(const std::vector<glm::uvec3>& T, const std::vector<Side>&
   c.components = comp_f.size();
   for (std::size_t v = 0; v + 1 < start.size(); ++v)
     if (start[v] != start[v + 1]) ++comp_v[comp_of[incident[start[v]]]];
-  for_each_edge(he, [&](std::span<const Side> run) { ++comp_e[comp_of[run[0].tri]]; });
+  for_each_edge(ek, 0, ek.first.size() - 1,
+                [&](std::uint32_t, std::span<const std::uint64_t> run) { ++comp_e[comp_of[EdgeKeys::side(run[0]) / 3]]; });
   for (std::size_t k = 0; k < comp_f.size(); ++k) {
     const long chi = comp_v[k] - comp_e[k] + comp_f[k];
     c.euler += chi;
@@ -192,9 +197,9 @@ MeshChecks census(const TriangleMesh& mesh, bool full) {
   const auto& T = mesh.triangles;
   c.vertices = P.size();
   c.triangles = T.size();
-  const std::vector<Side> he = sides_by_edge(P.size(), T);
+  const EdgeKeys ek = edge_keys(T, P.size());
   ConcurrentUnionFind tris(full ? T.size() : 0);
-  edge_and_fan_census(T, he, P.size(), full ? &tris : nullptr, c);
+  edge_and_fan_census(T, ek, P.size(), full ? &tris : nullptr, c);
   if (full) {
     // Each vertex's triangles.
     std::vector<std::uint32_t> start(P.size() + 1, 0);
@@ -204,7 +209,7 @@ MeshChecks census(const TriangleMesh& mesh, bool full) {
     std::vector<std::uint32_t> incident(start.back()), fill(start.begin(), start.end() - 1);
     for (std::uint32_t t = 0; t < T.size(); ++t)
       for (int k = 0; k < 3; ++k) incident[fill[T[t][k]]++] = t;
-    component_census(T, he, tris, start, incident, c);
+    component_census(T, ek, tris, start, incident, c);
   }
   geometry_census(mesh, full, c);
   return c;

@@ -1,6 +1,7 @@
 // Triangles' sides grouped by the edge they lie on, as 8-byte keys filed under each edge's lower
-// vertex: the first step of a mesh leaf's neighbour table (nodes/mesh_build.cpp) and of the
-// strategies' boundary search (meshers/edges.hpp), without a hash map or a sort of every side.
+// vertex: the first step of a mesh leaf's neighbour table (nodes/mesh_build.cpp), of the
+// strategies' boundary search (meshers/edges.hpp) and of the mesh checks (meshers/mesh_checks.hpp),
+// without a hash map or a sort of every side.
 #pragma once
 
 #include <glm/vec3.hpp>
