@@ -10,6 +10,7 @@
 #include "meshers/union_find.hpp"
 #include "runtime/subtree_hash.hpp"
 
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
@@ -88,18 +89,19 @@ bool still_valid(const QualityPiece& piece, const QualityReuse& reuse) {
   return true;
 }
 
-// improve_whole on one piece, or its result from the cache. `origin` receives the piece's local
-// indices (~0u for new vertices).
-void improve_or_reuse(const TriangleMesh& in, std::span<const std::uint8_t> keep, std::span<const std::uint8_t> crease,
+// improve_whole on one piece, or its result from the cache. Takes the piece's mesh (its input is
+// not held beside the result). `origin` receives the piece's local indices (~0u for new vertices).
+void improve_or_reuse(TriangleMesh&& in, std::span<const std::uint8_t> keep, std::span<const std::uint8_t> crease,
                       const BatchField& field, double T, double h, const QualityOptions& options,
                       const QualityReuse* reuse, TriangleMesh& out, std::vector<std::uint32_t>& origin,
                       QualityStats& st) {
-  out = in;
   if (!reuse || !reuse->cache || !reuse->part_of || !reuse->part_key) {
+    out = std::move(in);
     improve_whole(out, keep, crease, field, T, h, options, st, origin);
     return;
   }
   const std::uint64_t key = hash_mix(piece_key(in, keep, crease, T, h, options), reuse->context);
+  out = std::move(in);
   if (const auto hit = reuse->cache->find<QualityPiece>(key); hit && still_valid(*hit, *reuse)) {
     out = hit->mesh;
     origin = hit->origin;
@@ -120,29 +122,32 @@ void improve_or_reuse(const TriangleMesh& in, std::span<const std::uint8_t> keep
   reuse->cache->insert<QualityPiece>(key, std::move(piece), bytes);
 }
 
-// Each part improved on its own, in parallel, its rim locked; put back in part order.
-// renumber[v] receives each old vertex's new index, ~0u for the collapsed.
-void improve_pieces(TriangleMesh& mesh, const Pieces& pieces, std::span<const std::uint8_t> locked,
-                    std::span<const std::uint8_t> crease, const BatchField& field, double T, double h,
-                    const QualityOptions& options, const QualityReuse* reuse, QualityStats& st,
-                    std::vector<std::uint32_t>& renumber) {
-  const std::size_t n = pieces.parts.size();
-  std::vector<TriangleMesh> changed(n);
-  std::vector<std::vector<std::uint32_t>> origin(n);
-  std::vector<QualityStats> part_stats(n);
-  tbb::parallel_for(std::size_t(0), n, [&](std::size_t i) {
-    const Submesh& sub = pieces.parts[i];
+// `count` parts improved on their own, in parallel, their rims locked; put back in part order
+// after the untaken triangles `rest`. part(i) makes part i when its work starts, and its mesh is
+// given to the work, so that no part's input is held beside its result. renumber[v] receives each
+// old vertex's new index, ~0u for the collapsed.
+template <class Part>
+void improve_parts(TriangleMesh& mesh, std::size_t count, Part&& part, std::span<const glm::uvec3> rest,
+                   std::span<const std::uint8_t> locked, std::span<const std::uint8_t> crease, const BatchField& field,
+                   double T, double h, const QualityOptions& options, const QualityReuse* reuse, QualityStats& st,
+                   std::vector<std::uint32_t>& renumber) {
+  std::vector<TriangleMesh> changed(count);
+  std::vector<std::vector<std::uint32_t>> origin(count);
+  std::vector<QualityStats> part_stats(count);
+  tbb::parallel_for(std::size_t(0), count, [&](std::size_t i) {
+    Submesh sub = part(i);
     if (sub.mesh.triangles.empty()) return;  // a slab no vertex lies in
     std::vector<std::uint8_t> keep(sub.origin.size()), on_crease(crease.empty() ? 0 : sub.origin.size());
     for (std::size_t v = 0; v < keep.size(); ++v) keep[v] = sub.rim[v] || (!locked.empty() && locked[sub.origin[v]]);
     for (std::size_t v = 0; v < on_crease.size(); ++v) on_crease[v] = crease[sub.origin[v]];
-    improve_or_reuse(sub.mesh, keep, on_crease, field, T, h, options, reuse, changed[i], origin[i], part_stats[i]);
+    improve_or_reuse(std::move(sub.mesh), keep, on_crease, field, T, h, options, reuse, changed[i], origin[i],
+                     part_stats[i]);
     ++part_stats[i].pieces;
     for (std::uint32_t& o : origin[i])
       if (o != ~0u) o = sub.origin[o];
   });
   for (const QualityStats& p : part_stats) st += p;
-  put_back(mesh, pieces, changed, origin, &renumber);
+  put_back(mesh, rest, changed, origin, &renumber);
 }
 
 // `locked` with every vertex of a component less than kSmallComponentCells precisions across
@@ -186,25 +191,35 @@ void improve_quality(TriangleMesh& mesh, std::span<const std::uint8_t> locked, s
       const glm::uvec3 tri = mesh.triangles[t];
       piece_of[t] = slab[tri[0]] == slab[tri[1]] && slab[tri[0]] == slab[tri[2]] ? slab[tri[0]] : ~0u;
     }
-    const Pieces pieces = take_pieces(mesh, std::move(piece_of), count);
+    // Each slab is taken out when its work starts: at most one a thread is held beside the mesh.
+    const PiecePlan plan = plan_pieces(mesh, std::move(piece_of), count);
     std::vector<std::uint8_t> band(mesh.positions.size(), 0);
-    for (const glm::uvec3& t : pieces.rest) band[t[0]] = band[t[1]] = band[t[2]] = 1;
+    for (const glm::uvec3& t : plan.rest) band[t[0]] = band[t[1]] = band[t[2]] = 1;
     std::vector<std::uint32_t> renumber;
     const std::vector<std::uint8_t> kept = lock_small_components(mesh, locked, h);
     locked = kept;
-    improve_pieces(mesh, pieces, locked, crease, field, threshold, h, options, reuse, st, renumber);
+    const bool bands = !plan.rest.empty();
+    {
+      tbb::enumerable_thread_specific<std::vector<std::uint32_t>> locals(mesh.positions.size(), ~0u);
+      const TriangleMesh& whole = mesh;
+      improve_parts(
+          mesh, count, [&](std::size_t i) { return take_part(whole, plan, i, locals.local()); }, plan.rest, locked,
+          crease, field, threshold, h, options, reuse, st, renumber);
+    }
     // The band's vertices were rims, locked: they survive, under new indices.
     auto moved = [&](std::span<const std::uint8_t> flags) { return renumbered(flags, renumber, mesh.positions.size()); };
     if (crease_after && !crease.empty()) *crease_after = moved(crease);
-    if (!pieces.rest.empty()) {
+    if (bands) {
       // Three rings around it: the slabs' rims and their neighbours did not move, nor will a
       // region's rim and its neighbours.
       std::vector<std::uint8_t> region = moved(band);
       const std::vector<std::uint8_t> any(region.size(), 1), around = rings_around(mesh, region, any, kBandRings);
       for (std::size_t v = 0; v < region.size(); ++v) region[v] |= around[v];
       const std::vector<std::uint8_t> locked2 = moved(locked), crease2 = moved(crease);
-      improve_pieces(mesh, take_region(mesh, region, true), locked2, crease2, field, threshold, h, options, reuse, st,
-                     renumber);
+      Pieces between = take_region(mesh, region, true);
+      improve_parts(
+          mesh, between.parts.size(), [&](std::size_t i) { return std::move(between.parts[i]); }, between.rest, locked2,
+          crease2, field, threshold, h, options, reuse, st, renumber);
       if (crease_after && !crease.empty()) *crease_after = moved(crease2);
     }
   }

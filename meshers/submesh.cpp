@@ -87,17 +87,18 @@ std::vector<int> collected_order(int n, Deleted deleted) {
 
 }  // namespace
 
-Pieces take_pieces(const TriangleMesh& mesh, std::vector<std::uint32_t> piece_of, std::size_t count) {
+PiecePlan plan_pieces(const TriangleMesh& mesh, std::vector<std::uint32_t> piece_of, std::size_t count) {
   const std::size_t nv = mesh.positions.size(), nt = mesh.triangles.size();
-  std::vector<std::vector<std::uint32_t>> of_part(count);
+  PiecePlan plan;
+  plan.of_part.resize(count);
   for (std::uint32_t t = 0; t < nt; ++t)
-    if (piece_of[t] != ~0u) of_part[piece_of[t]].push_back(t);
+    if (piece_of[t] != ~0u) plan.of_part[piece_of[t]].push_back(t);
   // A part pinched at a vertex gives its triangles there back, until no part is pinched.
   tbb::parallel_for(std::size_t(0), count, [&](std::size_t i) {
     for (int round = 0; round < 8; ++round) {
-      const std::vector<std::uint32_t> pinched = pinched_vertices(mesh, of_part[i]);
+      const std::vector<std::uint32_t> pinched = pinched_vertices(mesh, plan.of_part[i]);
       if (pinched.empty()) break;
-      std::erase_if(of_part[i], [&](std::uint32_t t) {
+      std::erase_if(plan.of_part[i], [&](std::uint32_t t) {
         const bool drop = touches(mesh.triangles[t], pinched);
         if (drop) piece_of[t] = ~0u;
         return drop;
@@ -107,38 +108,52 @@ Pieces take_pieces(const TriangleMesh& mesh, std::vector<std::uint32_t> piece_of
   // A vertex is on a part's rim when a triangle of another part, or of none, uses it.
   // The one part using a vertex (~0u: only untaken triangles), ~1u for several, ~2u for none yet.
   constexpr std::uint32_t kUnseen = ~2u;
-  std::vector<std::uint32_t> owner(nv, kUnseen);
+  plan.owner.assign(nv, kUnseen);
   for (std::uint32_t t = 0; t < nt; ++t)
     for (int k = 0; k < 3; ++k) {
-      std::uint32_t& o = owner[mesh.triangles[t][k]];
+      std::uint32_t& o = plan.owner[mesh.triangles[t][k]];
       o = o == kUnseen || o == piece_of[t] ? piece_of[t] : ~1u;
     }
+  for (std::uint32_t t = 0; t < nt; ++t)
+    if (piece_of[t] == ~0u) plan.rest.push_back(mesh.triangles[t]);
+  return plan;
+}
+
+// The part numbers its vertices in the order its triangles meet them: counted first, so that its
+// arrays are sized exactly.
+Submesh take_part(const TriangleMesh& mesh, const PiecePlan& plan, std::size_t i, std::vector<std::uint32_t>& local) {
+  Submesh sub;
+  std::uint32_t used = 0;
+  for (const std::uint32_t t : plan.of_part[i])
+    for (int k = 0; k < 3; ++k)
+      if (std::uint32_t& l = local[mesh.triangles[t][k]]; l == ~0u) l = used++;
+  sub.mesh.positions.resize(used);
+  sub.origin.resize(used);
+  sub.rim.resize(used);
+  sub.mesh.triangles.reserve(plan.of_part[i].size());
+  for (const std::uint32_t t : plan.of_part[i]) {
+    glm::uvec3 lt;
+    for (int k = 0; k < 3; ++k) {
+      const std::uint32_t v = mesh.triangles[t][k];
+      lt[k] = local[v];
+      sub.mesh.positions[lt[k]] = mesh.positions[v];
+      sub.origin[lt[k]] = v;
+      sub.rim[lt[k]] = plan.owner[v] != i;
+    }
+    sub.mesh.triangles.push_back(lt);
+  }
+  for (const std::uint32_t v : sub.origin) local[v] = ~0u;
+  return sub;
+}
+
+Pieces take_pieces(const TriangleMesh& mesh, std::vector<std::uint32_t> piece_of, std::size_t count) {
+  PiecePlan plan = plan_pieces(mesh, std::move(piece_of), count);
   Pieces out;
   out.parts.resize(count);
-  for (std::uint32_t t = 0; t < nt; ++t)
-    if (piece_of[t] == ~0u) out.rest.push_back(mesh.triangles[t]);
-  // Each part numbers its vertices in the order its triangles meet them, in parallel: a thread's
-  // table of local numbers is cleared after each part it takes.
-  tbb::enumerable_thread_specific<std::vector<std::uint32_t>> locals(nv, ~0u);
-  tbb::parallel_for(std::uint32_t(0), std::uint32_t(count), [&](std::uint32_t i) {
-    std::vector<std::uint32_t>& local = locals.local();
-    Submesh& sub = out.parts[i];
-    for (const std::uint32_t t : of_part[i]) {
-      glm::uvec3 lt;
-      for (int k = 0; k < 3; ++k) {
-        const std::uint32_t v = mesh.triangles[t][k];
-        if (local[v] == ~0u) {
-          local[v] = std::uint32_t(sub.mesh.positions.size());
-          sub.mesh.positions.push_back(mesh.positions[v]);
-          sub.origin.push_back(v);
-          sub.rim.push_back(owner[v] != i);
-        }
-        lt[k] = local[v];
-      }
-      sub.mesh.triangles.push_back(lt);
-    }
-    for (const std::uint32_t v : sub.origin) local[v] = ~0u;
-  });
+  out.rest = std::move(plan.rest);
+  // In parallel: a thread's table of local numbers is cleared after each part it takes.
+  tbb::enumerable_thread_specific<std::vector<std::uint32_t>> locals(mesh.positions.size(), ~0u);
+  tbb::parallel_for(std::size_t(0), count, [&](std::size_t i) { out.parts[i] = take_part(mesh, plan, i, locals.local()); });
   return out;
 }
 
@@ -175,13 +190,18 @@ Pieces take_region(const TriangleMesh& mesh, std::span<const std::uint8_t> regio
 
 void put_back(TriangleMesh& mesh, const Pieces& pieces, std::span<const TriangleMesh> changed,
               std::span<const std::vector<std::uint32_t>> origin, std::vector<std::uint32_t>* renumber) {
+  put_back(mesh, pieces.rest, changed, origin, renumber);
+}
+
+void put_back(TriangleMesh& mesh, std::span<const glm::uvec3> rest, std::span<const TriangleMesh> changed,
+              std::span<const std::vector<std::uint32_t>> origin, std::vector<std::uint32_t>* renumber) {
   const std::size_t old_count = mesh.positions.size();
   std::vector<glm::dvec3> positions = std::move(mesh.positions);
   std::vector<glm::uvec3> triangles;
   std::size_t added = 0;
   for (const TriangleMesh& c : changed) added += c.triangles.size();
-  triangles.reserve(pieces.rest.size() + added);
-  triangles.assign(pieces.rest.begin(), pieces.rest.end());
+  triangles.reserve(rest.size() + added);
+  triangles.assign(rest.begin(), rest.end());
   for (std::size_t i = 0; i < changed.size(); ++i) {
     std::vector<std::uint32_t> index(changed[i].positions.size());
     for (std::size_t v = 0; v < changed[i].positions.size(); ++v) {

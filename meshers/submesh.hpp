@@ -36,11 +36,29 @@ Pieces take_region(const TriangleMesh& mesh, std::span<const std::uint8_t> regio
 /// Where a part would touch itself at a vertex, its triangles at that vertex stay in `rest`.
 Pieces take_pieces(const TriangleMesh& mesh, std::vector<std::uint32_t> piece_of, std::size_t count);
 
+/// What take_pieces decides before it copies anything: each part's triangles (ascending), the
+/// part using each vertex (~0u: only untaken triangles; ~1u: several) and the untaken triangles.
+/// With it a part can be taken when its work starts (take_part), so that parts worked on one after
+/// another are not all held at once.
+struct PiecePlan {
+  std::vector<std::vector<std::uint32_t>> of_part;
+  std::vector<std::uint32_t> owner;
+  std::vector<glm::uvec3> rest;
+};
+PiecePlan plan_pieces(const TriangleMesh& mesh, std::vector<std::uint32_t> piece_of, std::size_t count);
+
+/// Part i of `plan`, as take_pieces makes it (its arrays sized exactly). `local` holds one entry
+/// per vertex of `mesh`, all ~0u, and is left so (a scratch a thread may reuse for every part).
+Submesh take_part(const TriangleMesh& mesh, const PiecePlan& plan, std::size_t i, std::vector<std::uint32_t>& local);
+
 /// Puts the reworked parts back. changed[i] is part i after the work and origin[i] gives each of
 /// its vertices' index in the whole mesh, or ~0u for a new vertex. Surviving vertices keep their
 /// order, new ones follow in part order, unused ones are dropped; the untaken triangles come
 /// first, then each part's. With `renumber`, receives each old vertex's new index (~0u: dropped).
 void put_back(TriangleMesh& mesh, const Pieces& pieces, std::span<const TriangleMesh> changed,
+              std::span<const std::vector<std::uint32_t>> origin, std::vector<std::uint32_t>* renumber = nullptr);
+/// The same, given the untaken triangles.
+void put_back(TriangleMesh& mesh, std::span<const glm::uvec3> rest, std::span<const TriangleMesh> changed,
               std::span<const std::vector<std::uint32_t>> origin, std::vector<std::uint32_t>* renumber = nullptr);
 
 /// Each vertex's slab across the mesh's longest axis: slab k holds [k d, (k + 1) d) along it for
