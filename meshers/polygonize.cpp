@@ -209,7 +209,9 @@ void crease_phase(RootField& field, const FeatureOptions& features, double h, Tr
   for (std::size_t v = 0; v < on_crease.size(); ++v)
     if (on_crease[v]) near.grow(mesh.positions[v]);
   const std::vector<std::uint8_t> none(mesh.positions.size(), 0);
-  auto left = untangle(mesh, none, gradient_of(eval), field.T, near.expanded(2.0 * h), kUntangleRounds, on_crease);
+  // Every triangle the step cut has a crease point for a corner; the rest are as extracted.
+  auto left = untangle(mesh, none, gradient_of(eval), field.T, near.expanded(2.0 * h), kUntangleRounds, on_crease,
+                       on_crease);
   stats.unfold.pairs_before = stats.crease_intersections = left.size();
   resolve_folds(mesh, on_crease, eval, field.T, h, left, stats);
 }

@@ -188,7 +188,7 @@ std::vector<std::array<std::uint32_t, 2>> intersections_near(const TriangleMesh&
 
 std::vector<std::array<std::uint32_t, 2>> untangle(TriangleMesh& mesh, std::span<const std::uint8_t> fixed,
                                                    const BatchGradient& field, double T, const Aabb& region, int rounds,
-                                                   std::span<const std::uint8_t> crease) {
+                                                   std::span<const std::uint8_t> crease, std::span<const std::uint8_t> changed) {
   std::vector<std::uint8_t> far(mesh.positions.size());
   for (std::size_t v = 0; v < far.size(); ++v) far[v] = !fixed[v] && (crease.empty() || !crease[v]);
   // Beside a crease, a vertex's projection may land on the other sheet and round the edge: only
@@ -199,11 +199,11 @@ std::vector<std::array<std::uint32_t, 2>> untangle(TriangleMesh& mesh, std::span
   }
   const double longest = longest_edge(mesh);
   // Moves reach one ring beyond the hit vertices: later rounds search only around them.
-  std::vector<std::uint8_t> hit(mesh.positions.size(), 0);
+  std::vector<std::uint8_t> hit(changed.begin(), changed.end());
   for (int r = 0;; ++r) {
-    const auto pairs = r == 0 ? intersections_in(mesh, region) : intersections_near(mesh, hit, longest, region);
+    const auto pairs = r == 0 && changed.empty() ? intersections_in(mesh, region) : intersections_near(mesh, hit, longest, region);
     if (pairs.empty() || r == rounds) return pairs;
-    std::fill(hit.begin(), hit.end(), 0);
+    hit.assign(mesh.positions.size(), 0);
     for (const auto& pair : pairs)
       for (std::uint32_t t : pair)
         for (int k = 0; k < 3; ++k) hit[mesh.triangles[t][k]] = 1;

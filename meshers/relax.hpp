@@ -60,10 +60,13 @@ double longest_edge(const TriangleMesh& mesh);
 /// ring around them, except the `fixed` ones, are relaxed as above. Vertices flagged in `crease`
 /// (when not empty: points of a crease line) slide along their crease instead, toward the midpoint
 /// of their two crease neighbours. At most `rounds` rounds; returns the intersecting pairs left in
-/// the region (triangle indices, lower first).
+/// the region (triangle indices, lower first). With `changed` (one flag per vertex), every
+/// triangle that changed has a flagged corner and the others intersect nothing: the first search
+/// looks only near the flagged vertices (as intersections_near does), not at all of `region`.
 std::vector<std::array<std::uint32_t, 2>> untangle(TriangleMesh& mesh, std::span<const std::uint8_t> fixed,
                                                    const BatchGradient& field, double threshold, const Aabb& region,
-                                                   int rounds = 3, std::span<const std::uint8_t> crease = {});
+                                                   int rounds = 3, std::span<const std::uint8_t> crease = {},
+                                                   std::span<const std::uint8_t> changed = {});
 
 /// The vertices within `rings` edges of a seed, reached through vertices that `allowed` accepts;
 /// the seeds themselves are not included.

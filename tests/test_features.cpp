@@ -13,7 +13,11 @@
 #include <gtest/gtest.h>
 #include <tbb/task_arena.h>
 
+#include <algorithm>
+#include <array>
 #include <cstdio>
+#include <set>
+#include <tuple>
 #include <functional>
 #include <sstream>
 #include <string>
@@ -85,6 +89,47 @@ TEST(Features, CreasesComeOutSharp) {
       EXPECT_EQ(on.checks.components, off.checks.components) << what.str();
       EXPECT_NEAR(on.checks.volume, off.checks.volume, 0.01 * off.checks.volume) << what.str();
     }
+}
+
+TEST(Features, EveryTriangleTheStepChangesHasACreasePoint) {
+  // The polygonizer's untangling after the crease step searches only near the crease points
+  // (meshers/relax.hpp untangle's `changed`): every triangle the step cut or moved must have one
+  // for a corner, the others be the extracted mesh's as they were.
+  std::size_t changed = 0;
+  for (const Scene& s : sharp_scenes())
+    for (double h : {0.04, 0.02}) {
+      Builder b(kT);
+      const Tree t = b.build(s.make(b));
+      const TriangleMesh before = mesh(t, h, false).mesh;
+      const TapeEvaluator eval(std::make_shared<const Tape>(compile_tape(t.graph_ptr(), t.root(), kT)));
+      std::vector<glm::dvec3> grad(before.positions.size());
+      eval.gradient(before.positions, {}, grad);
+      std::vector<glm::vec3> normals(grad.size());
+      for (std::size_t v = 0; v < grad.size(); ++v) normals[v] = glm::vec3(-glm::normalize(grad[v]));
+      TriangleMesh after = before;
+      std::vector<std::uint8_t> on_crease;
+      const CreaseStats st = split_creases(after, normals, eval, kT, h, {}, &on_crease);
+      ASSERT_EQ(on_crease.size(), after.positions.size());
+      // Triangles by their corners' positions, each rotated to start at its least corner.
+      using Key = std::array<double, 9>;
+      auto key = [](const TriangleMesh& m, const glm::uvec3& tri) {
+        std::array<glm::dvec3, 3> c{m.positions[tri[0]], m.positions[tri[1]], m.positions[tri[2]]};
+        auto less = [](const glm::dvec3& p, const glm::dvec3& q) { return std::tie(p.x, p.y, p.z) < std::tie(q.x, q.y, q.z); };
+        std::rotate(c.begin(), std::min_element(c.begin(), c.end(), less), c.end());
+        return Key{c[0].x, c[0].y, c[0].z, c[1].x, c[1].y, c[1].z, c[2].x, c[2].y, c[2].z};
+      };
+      std::set<Key> extracted;
+      for (const glm::uvec3& tri : before.triangles) extracted.insert(key(before, tri));
+      std::size_t here = 0;
+      for (const glm::uvec3& tri : after.triangles) {
+        if (extracted.count(key(after, tri))) continue;
+        ++here;
+        EXPECT_TRUE(on_crease[tri[0]] || on_crease[tri[1]] || on_crease[tri[2]]) << s.name << " h=" << h;
+      }
+      EXPECT_GT(here, 0u) << s.name << " h=" << h << ": " << st.split_edges << " split edges";
+      changed += here;
+    }
+  EXPECT_GT(changed, 1000u);
 }
 
 TEST(Features, NoFoldsLeft) {
