@@ -229,7 +229,8 @@ void quality_phase(SurfaceField& field, RootField& root_field, double h, const Q
   std::vector<std::uint8_t> keep = on_crease;
   if (!keep.empty()) {
     const std::vector<std::uint8_t> any(keep.size(), 1), near = rings_around(mesh, on_crease, any, 2);
-    for (std::size_t v = 0; v < keep.size(); ++v) keep[v] |= near[v];
+    for (std::size_t v = 0; v < keep.size(); ++v)
+      if (!keep[v] && near[v]) keep[v] = kNearCrease;
   }
   const TriangleMesh extracted = mesh;
   std::vector<std::uint8_t> crease_after;

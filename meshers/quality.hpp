@@ -19,9 +19,10 @@
 //             a move that turns a triangle over or worsens its smallest angle much is undone.
 // Locked vertices (crease points, corners, exact seams, a mesh's boundary, triangles kept from
 // the user's meshes) neither move nor go away, and no edge between two of them is flipped or
-// collapsed, so creases stay sharp and open patches keep their rims. A component less than two
-// precisions across on every axis is locked whole: so few triangles fold into each other when
-// collapsed or relaxed, and there is nothing to gain.
+// collapsed, so creases stay sharp and open patches keep their rims (a needle's edge shorter than
+// kShortNeedleEdge cells still collapses a vertex locked only for lying beside a crease:
+// kNearCrease below). A component less than two precisions across on every axis is locked whole:
+// so few triangles fold into each other when collapsed or relaxed, and there is nothing to gain.
 //
 // The mesh is cut into slabs across its longest axis, kSlabCells precisions thick, at fixed
 // places in space (multiples of the slab's thickness from the origin); the slabs are worked on in
@@ -97,10 +98,18 @@ struct QualityStats {
   }
 };
 
+/// A `locked` value: the vertex lies beside a crease (the polygonizer's two rings around its
+/// crease points). It stays like a locked one, except that a needle's edge shorter than
+/// kShortNeedleEdge precisions may collapse it into its neighbour: beside a crease, two crossings
+/// near one grid point are otherwise a sliver for good, and a move that short changes no crease.
+/// Any other nonzero value locks the vertex outright.
+inline constexpr std::uint8_t kNearCrease = 2;
+inline constexpr double kShortNeedleEdge = 0.15;
+
 /// Improves the triangles of `mesh` in place. `locked` and `crease` hold one flag per vertex (or
-/// are empty): locked vertices stay, and crease vertices (points on a crease line, locked too)
-/// that are almost together merge into one. `field` is the surface's field, {field = threshold}
-/// the surface, the solid where it is larger; it is called from several threads at once (the
+/// are empty): locked vertices stay (but see kNearCrease), and crease vertices (points on a crease
+/// line, locked too) that are almost together merge into one. `field` is the surface's field,
+/// {field = threshold} the surface, the solid where it is larger; it is called from several threads at once (the
 /// pass works on slabs of the mesh in parallel, then on the bands between them). `h` is the
 /// precision (world units). Vertex indices change; with `crease_after`, receives the crease flags
 /// renumbered with them.

@@ -138,7 +138,7 @@ void improve_parts(TriangleMesh& mesh, std::size_t count, Part&& part, std::span
     Submesh sub = part(i);
     if (sub.mesh.triangles.empty()) return;  // a slab no vertex lies in
     std::vector<std::uint8_t> keep(sub.origin.size()), on_crease(crease.empty() ? 0 : sub.origin.size());
-    for (std::size_t v = 0; v < keep.size(); ++v) keep[v] = sub.rim[v] || (!locked.empty() && locked[sub.origin[v]]);
+    for (std::size_t v = 0; v < keep.size(); ++v) keep[v] = sub.rim[v] ? 1 : locked.empty() ? 0 : locked[sub.origin[v]];
     for (std::size_t v = 0; v < on_crease.size(); ++v) on_crease[v] = crease[sub.origin[v]];
     improve_or_reuse(std::move(sub.mesh), keep, on_crease, field, T, h, options, reuse, changed[i], origin[i],
                      part_stats[i]);

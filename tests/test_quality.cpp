@@ -143,6 +143,13 @@ TEST(Quality, CreasesStaySharp) {
     EXPECT_GT(on.stats.crease_edges, 0u);
     EXPECT_LT(on.checks.face_error_max, 0.1 * h) << h;
     EXPECT_LE(on.checks.face_error_mean, off.checks.face_error_mean * 1.05) << h;
+    std::printf("crease scene h=%g: first percentile %.2f, smallest %.2f degrees, %zu triangles\n", h,
+                on.checks.min_angle_p1, on.checks.min_angle, on.checks.triangles);
+    // Beside the crease: a needle's short edge may still take a vertex of the two rings
+    // (quality.hpp kNearCrease), and a cap flips when its flip keeps its sound neighbour's plane.
+    // Before, the first percentile was 7.6 and 10.9 degrees, the smallest angle 0.08 and 0.16.
+    EXPECT_GT(on.checks.min_angle_p1, h > 0.03 ? 10.0 : 14.0) << h;
+    EXPECT_GT(on.checks.min_angle, 1.0) << h;
   }
 }
 
