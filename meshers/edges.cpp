@@ -15,11 +15,9 @@ std::vector<BoundaryEdge> boundary_edges(const TriangleMesh& mesh) {
   const std::size_t V = mesh.positions.size();
   const EdgeKeys e = edge_keys(T, V);
   auto for_each_single = [&](std::size_t v, auto&& f) {
-    for (std::size_t i = e.first[v]; i < e.first[v + 1];) {
-      const std::size_t j = e.run_end(std::uint32_t(v), i);
-      if (j - i == 1) f(EdgeKeys::side(e.keys[i]));
-      i = j;
-    }
+    e.for_each_edge(std::uint32_t(v), [&](std::span<const std::uint64_t> run) {
+      if (run.size() == 1) f(EdgeKeys::side(run[0]));
+    });
   };
   std::vector<std::uint32_t> at(V + 1, 0);
   tbb::parallel_for(std::size_t(0), V, [&](std::size_t v) { for_each_single(v, [&](std::uint32_t) { ++at[v + 1]; }); });

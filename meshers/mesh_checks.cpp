@@ -50,16 +50,12 @@ std::pair<double, double> min_and_p1(std::vector<float>& angles) {
 }
 
 
-// Each edge's sides (one run of a vertex's keys: meshers' EdgeKeys file every edge under its lower
-// vertex) as f(v, keys), for the vertices in [from, to).
+// Each edge's sides (EdgeKeys file every edge under its lower vertex) as f(v, keys), for the
+// vertices in [from, to).
 template <class F>
 void for_each_edge(const EdgeKeys& e, std::size_t from, std::size_t to, F&& f) {
   for (std::size_t v = from; v < to; ++v)
-    for (std::size_t i = e.first[v]; i < e.first[v + 1];) {
-      const std::size_t j = e.run_end(std::uint32_t(v), i);
-      f(std::uint32_t(v), std::span(e.keys).subspan(i, j - i));
-      i = j;
-    }
+    e.for_each_edge(std::uint32_t(v), [&](std::span<const std::uint64_t> run) { f(std::uint32_t(v), run); });
 }
 
 // Edges by use and direction; vertex fans; with `tris`, the triangles joined across each edge

@@ -28,6 +28,15 @@ struct EdgeKeys {
     while (j < first[v + 1] && upper(keys[j]) == upper(keys[i])) ++j;
     return j;
   }
+  /// Calls f(run) for each edge filed under vertex v, in order: `run` is its sides' keys.
+  template <class F>
+  void for_each_edge(std::uint32_t v, F&& f) const {
+    for (std::size_t i = first[v]; i < first[v + 1];) {
+      const std::size_t j = run_end(v, i);
+      f(std::span<const std::uint64_t>(keys).subspan(i, j - i));
+      i = j;
+    }
+  }
 };
 
 /// Every side of `triangles`, whose indices are below `vertices`. Filed in parallel (each vertex's

@@ -34,23 +34,21 @@ Topology edge_topology(const std::vector<glm::uvec3>& tris) {
   for (const glm::uvec3& t : tris) vertices = std::max({vertices, t[0] + 1, t[1] + 1, t[2] + 1});
   const EdgeKeys e = edge_keys(tris, vertices);
   for (std::uint32_t v = 0; v < vertices; ++v)
-    for (std::size_t i = e.first[v]; i < e.first[v + 1];) {
-      const std::size_t j = e.run_end(v, i);
-      const std::uint32_t h0 = EdgeKeys::side(e.keys[i]);
-      if (j - i == 1) {
+    e.for_each_edge(v, [&](std::span<const std::uint64_t> run) {
+      const std::uint32_t h0 = EdgeKeys::side(run[0]);
+      if (run.size() == 1) {
         ++topo.boundary;
         topo.open[h0] = 1;
         topo.first_boundary = std::min(topo.first_boundary, h0);
-      } else if (j - i == 2) {
-        const std::uint32_t h1 = EdgeKeys::side(e.keys[i + 1]);
+      } else if (run.size() == 2) {
+        const std::uint32_t h1 = EdgeKeys::side(run[1]);
         topo.nbr[h0] = h1 / 3;
         topo.nbr[h1] = h0 / 3;
       } else {
         ++topo.nonmanifold;
         topo.first_nonmanifold = std::min(topo.first_nonmanifold, h0);
       }
-      i = j;
-    }
+    });
   return topo;
 }
 
