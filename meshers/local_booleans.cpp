@@ -53,8 +53,9 @@ TriangleMesh boolean_step(const LocalInput& in, NodeKind kind, BooleanOperand& a
     return piece;
   };
   double edge = 1.5 * in.precision;
-  refine(a, meet.expanded(in.precision), edge);
-  refine(b, meet.expanded(in.precision), edge);
+  // First only near the seams: each operand's surface is cut where the other's field is T.
+  a.shape.refine_near_seam(meet.expanded(in.precision), edge, shifted(b.field, 1, -T));
+  b.shape.refine_near_seam(meet.expanded(in.precision), edge, shifted(a.field, 1, -T));
   TriangleMesh out;
   for (int round = 0;; ++round) {
     std::vector<TriangleMesh> pieces;

@@ -13,27 +13,43 @@
 namespace ht::local {
 
 
-TriangleMesh RefinedMesh::step(const TriangleMesh& from, const Aabb& region, double edge) const {
-  return warp_mesh(from, [](const glm::dvec3& p) { return p; }, surface_.get(), threshold_, edge, nullptr, &region);
+TriangleMesh RefinedMesh::step(const TriangleMesh& from, const Step& s) const {
+  return warp_mesh(from, [](const glm::dvec3& p) { return p; }, surface_.get(), threshold_, s.edge, nullptr, &s.region,
+                   s.only);
 }
 
 const TriangleMesh& RefinedMesh::mesh() {
   if (!source_ || made_) return mesh_;
   mesh_ = TriangleMesh();
-  for (std::size_t k = 0; k < steps_.size(); ++k) mesh_ = step(k == 0 ? *source_ : mesh_, steps_[k].first, steps_[k].second);
+  for (std::size_t k = 0; k < steps_.size(); ++k) mesh_ = step(k == 0 ? *source_ : mesh_, steps_[k]);
   if (steps_.empty()) mesh_ = *source_;
   made_ = true;
   return mesh_;
 }
 
-void RefinedMesh::refine(const Aabb& region, double edge) {
+void RefinedMesh::push(Step s) {
   if (!source_) {
-    mesh_ = step(mesh_, region, edge);
+    mesh_ = step(mesh_, s);
     return;
   }
-  mesh_ = step(steps_.empty() ? *source_ : mesh(), region, edge);
-  steps_.emplace_back(region, edge);
+  mesh_ = step(steps_.empty() ? *source_ : mesh(), s);
+  steps_.push_back(std::move(s));
   made_ = true;
+}
+
+void RefinedMesh::refine(const Aabb& region, double edge) { push({region, edge, {}}); }
+
+void RefinedMesh::refine_near_seam(const Aabb& region, double edge, const BatchField& cut) {
+  const TriangleMesh& from = source_ && steps_.empty() ? *source_ : mesh();
+  std::vector<std::uint32_t> inside;
+  for (std::uint32_t v = 0; v < from.positions.size(); ++v)
+    if (region.contains(from.positions[v])) inside.push_back(v);
+  std::vector<glm::dvec3> points(inside.size());
+  for (std::size_t k = 0; k < inside.size(); ++k) points[k] = from.positions[inside[k]];
+  std::vector<double> at(inside.size()), values(from.positions.size(), 0.0);
+  if (!points.empty()) cut(points, at);
+  for (std::size_t k = 0; k < inside.size(); ++k) values[inside[k]] = at[k];
+  push({region, edge, near_seam(from, region, values, kCoarseEdges * edge)});
 }
 
 TriangleMesh RefinedMesh::release() && {

@@ -92,6 +92,11 @@ class RefinedMesh {
   RefinedMesh(TriangleMesh owned, double threshold) : threshold_(threshold), mesh_(std::move(owned)) {}
 
   void refine(const Aabb& region, double edge);
+  /// The same, but only near the seam `cut` makes inside `region` (near_seam, with long edges
+  /// at kCoarseEdges * edge): splitting elsewhere would only halve a scan's own long thin
+  /// triangles into slivers the seam never reaches. `cut` is evaluated at the vertices in
+  /// `region` once; the flags are kept so that a replay splits the same edges.
+  void refine_near_seam(const Aabb& region, double edge, const BatchField& cut);
   /// The mesh after every refinement so far (made again if it was dropped).
   const TriangleMesh& mesh();
   void drop() {
@@ -102,12 +107,18 @@ class RefinedMesh {
   TriangleMesh release() &&;
 
  private:
-  TriangleMesh step(const TriangleMesh& from, const Aabb& region, double edge) const;
+  struct Step {
+    Aabb region;
+    double edge;
+    std::vector<std::uint8_t> only;  // empty: every vertex
+  };
+  TriangleMesh step(const TriangleMesh& from, const Step& s) const;
+  void push(Step s);
   const TriangleMesh* source_ = nullptr;
   std::shared_ptr<const TapeEvaluator> surface_;
   double threshold_;
   TriangleMesh mesh_;
-  std::vector<std::pair<Aabb, double>> steps_;  // with a source: region and edge of each refinement
+  std::vector<Step> steps_;  // with a source: each refinement, to replay
   bool made_ = false;                           // mesh_ holds every step
 };
 /// Turns every triangle over.
