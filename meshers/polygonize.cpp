@@ -216,8 +216,8 @@ void crease_phase(RootField& field, const FeatureOptions& features, double h, Tr
   resolve_folds(mesh, on_crease, eval, field.T, h, left, stats);
 }
 
-// The quality pass with the crease points and two rings around them kept as the feature step
-// left them; then, since a move can push a face through a sheet close by (a thin wing, two
+// The quality pass with the crease points kept as the feature step left them and two rings
+// around them worked on only by steps that keep their faces on the surface; then, since a move can push a face through a sheet close by (a thin wing, two
 // sheets beside a crease), what it left intersecting is collapsed away too.
 void quality_phase(SurfaceField& field, RootField& root_field, double h, const QualityOptions& options,
                    MemoryBudget& budget, TriangleMesh& mesh, const std::vector<std::uint8_t>& on_crease,

@@ -2,6 +2,7 @@
 #include "meshers/quality_whole.hpp"
 
 #include "meshers/halfedge_ops.hpp"
+#include "meshers/off_surface.hpp"
 #include "meshers/relax.hpp"
 #include "meshers/submesh.hpp"
 #include "meshers/triangle_shape.hpp"
@@ -36,6 +37,7 @@ constexpr double kDegenerateCos = 0.9999619230641713; // cos 0.5 degrees: no col
 constexpr double kAimCos = 0.8191520442889918;      // cos 35 degrees: faces thinner than this are worked on
 constexpr double kShortMove = 0.02;                 // of a cell: a tangential move this short is not made
 constexpr double kWorseCos = 0.9659258262890683;    // cos 15 degrees: a relaxation may not leave a face thinner
+constexpr double kOffCells = 0.02;                  // of a cell: beside a crease, a face's middle may be this far off
 constexpr double kCapFlipCos = 0.8660254037844387;  // cos 30 degrees: a cap's flip keeps its sound neighbour's plane
 
 glm::dvec3 g(const TriMesh::Point& p) { return {p[0], p[1], p[2]}; }
@@ -45,13 +47,14 @@ class Improver {
  public:
   Improver(const TriangleMesh& in, std::span<const std::uint8_t> locked, std::span<const std::uint8_t> crease,
            const BatchField& field, double T, double h, const QualityOptions& options)
-      : crease_(crease), field_(field), T_(T), h_(h), o_(options) {
+      : crease_(crease), field_(field), T_(T), h_(h), o_(options), off_(field, T, h) {
     if (!to_openmesh(in, locked, {}, m_, locked_, origin_)) return;
     m_.add_property(slope_);
     m_.add_property(near_crease_);
     for (const VH v : m_.vertices()) {
       m_.property(slope_, v) = std::nan("");
       m_.property(near_crease_, v) = !locked.empty() && locked[std::size_t(v.idx())] == kNearCrease;
+      if (m_.property(near_crease_, v)) m_.property(locked_, v) = false, creases_near_ = true;
     }
     // An open patch keeps its rim.
     for (const VH v : m_.vertices())
@@ -77,6 +80,24 @@ class Improver {
 
  private:
   bool locked(VH v) const { return m_.property(locked_, v); }
+  // A crease point or within kNearCrease rings of one: faces here may straddle the crease.
+  bool beside_crease(VH v) const { return m_.property(near_crease_, v) || on_crease(v); }
+  // A step beside a crease may not take a face's middle further off the surface than kOffCells
+  // cells or the faces it replaces were, the larger: a face across the crease cuts its corner
+  // off (measured, not guessed from normals). `faces`: the old ones, then the new ones.
+  bool no_further_off(std::span<const std::array<glm::dvec3, 3>> faces, std::size_t old) {
+    const std::vector<double>& off = off_.faces(faces);
+    double was = kOffCells * h_, is = 0;
+    for (std::size_t i = 0; i < off.size(); ++i) (i < old ? was : is) = std::max(i < old ? was : is, off[i]);
+    return is <= was;
+  }
+  // Beside a crease: a crease point or kNearCrease vertex among `v` and its neighbours.
+  bool near_a_crease(VH v) const {
+    if (beside_crease(v)) return true;
+    for (const VH w : m_.vv_range(v))
+      if (beside_crease(w)) return true;
+    return false;
+  }
   bool frozen(EH e) const {
     const HH h = m_.halfedge_handle(e, 0);
     return locked(m_.from_vertex_handle(h)) && locked(m_.to_vertex_handle(h));
@@ -111,44 +132,14 @@ class Improver {
     return {m_.from_vertex_handle(h), m_.to_vertex_handle(h), m_.to_vertex_handle(m_.next_halfedge_handle(h))};
   }
 
-  // Newton steps toward f = T along each point's direction (a unit normal), on field values
-  // only (a gradient costs five values). The derivative along the direction, slope[i], comes
-  // from a difference quotient where it is not known yet (not finite) and is reused after: a
-  // vertex's slope changes little as it slides along the surface. A point whose step would leave
-  // the cell around it stays.
-  void project(std::vector<glm::dvec3>& at, const std::vector<glm::dvec3>& dir, std::vector<double>& slope) {
-    const std::size_t n = at.size();
-    if (n == 0) return;
-    const double T = T_, delta = 0.05 * h_;
-    std::vector<std::uint32_t> unknown;
-    for (std::size_t i = 0; i < n; ++i)
-      if (!std::isfinite(slope[i])) unknown.push_back(std::uint32_t(i));
-    std::vector<glm::dvec3> probe(at);
-    for (const std::uint32_t i : unknown) probe.push_back(at[i] + delta * dir[i]);
-    std::vector<double> value(probe.size());
-    const std::vector<glm::dvec3> start = at;
-    for (int s = 0; s < o_.newton_steps; ++s) {
-      if (s == 0) {
-        field_(probe, value);
-        for (std::size_t k = 0; k < unknown.size(); ++k) slope[unknown[k]] = (value[n + k] - value[unknown[k]]) / delta;
-      } else {
-        field_(at, std::span(value).first(n));
-      }
-      for (std::size_t i = 0; i < n; ++i) {
-        const double step = (T - value[i]) / slope[i];
-        at[i] += std::clamp(step, -h_, h_) * dir[i];  // NaN stays NaN: a failure
-      }
-    }
-    // A long step means the direction missed the surface (or crossed onto another sheet).
-    for (std::size_t i = 0; i < n; ++i)
-      if (!(glm::length(at[i] - start[i]) <= 0.2 * h_)) at[i] = glm::dvec3(std::nan(""));
-  }
-
   std::size_t split() {
     std::vector<EH> todo;
     std::vector<glm::dvec3> mids, dirs;
     for (const EH e : m_.edges()) {
       if (frozen(e) || m_.calc_edge_length(e) <= 2.0 * h_) continue;
+      // Beside a crease a midpoint's Newton step may stop at the field's kink, off the surface.
+      if (beside_crease(m_.from_vertex_handle(m_.halfedge_handle(e, 0))) || beside_crease(m_.to_vertex_handle(m_.halfedge_handle(e, 0))))
+        continue;
       todo.push_back(e);
       mids.push_back(g(m_.calc_edge_midpoint(e)));
       glm::dvec3 n(0.0);
@@ -159,7 +150,7 @@ class Improver {
       dirs.push_back(glm::length(n) > 0 ? glm::normalize(n) : glm::dvec3(0.0));
     }
     std::vector<double> slopes(todo.size(), std::nan(""));
-    project(mids, dirs, slopes);
+    off_.project(mids, dirs, slopes, o_.newton_steps);
     std::size_t done = 0;
     for (std::size_t i = 0; i < todo.size(); ++i) {
       if (std::isnan(mids[i].x)) continue;  // the midpoint found no surface near it
@@ -202,6 +193,24 @@ class Improver {
     return worst;
   }
 
+  // Collapsing h beside a crease takes no face's middle further off the surface.
+  bool surface_kept(HH h) {
+    const VH from = m_.from_vertex_handle(h), to = m_.to_vertex_handle(h);
+    std::vector<std::array<glm::dvec3, 3>>& faces = faces_;
+    faces.clear();
+    for (const FH f : m_.vf_range(from)) {
+      const auto c = corners(f);
+      faces.push_back({p(c[0]), p(c[1]), p(c[2])});
+    }
+    const std::size_t old = faces.size();
+    for (const FH f : m_.vf_range(from)) {
+      const auto c = corners(f);
+      if (c[0] == to || c[1] == to || c[2] == to) continue;
+      faces.push_back({c[0] == from ? p(to) : p(c[0]), c[1] == from ? p(to) : p(c[1]), c[2] == from ? p(to) : p(c[2])});
+    }
+    return no_further_off(faces, old);
+  }
+
   // Crease points almost together (the crease passing near where several edges' crease points
   // meet) leave slivers turned any way between them, which fold into their neighbours: each such
   // pair becomes one point of the crease.
@@ -225,7 +234,7 @@ class Improver {
 
   bool on_crease(VH v) const {
     const std::uint32_t o = m_.property(origin_, v);
-    return o != ~0u && crease_[o];
+    return o != ~0u && !crease_.empty() && crease_[o];
   }
 
   // Collapsing x turns no face around its start by more than 60 degrees and leaves none degenerate.
@@ -269,10 +278,9 @@ class Improver {
       const bool short_edge = len[at] < kShortNeedleEdge * h_;
       for (const HH h : {shortest, m_.opposite_halfedge_handle(shortest)}) {
         const VH from = m_.from_vertex_handle(h);
-        // An edge this short moves nothing that matters: a kNearCrease vertex may go. (Letting a
-        // free vertex beside kNearCrease ones go too raised the OpenVDB peer's global csg's
-        // smallest smooth angle further, 0.66 -> 3.3 degrees, but on a random tree of
-        // tests/test_node_cache.cpp left a child mesh whose trim then refined to 255k triangles.)
+        // An edge this short moves nothing that matters: a kNearCrease vertex may go even beside
+        // a crease point (near_locked). Any collapse beside a crease is measured after the
+        // shapes (surface_kept).
         const bool may_go = (!locked(from) && !near_locked(from)) || (short_edge && m_.property(near_crease_, from));
         if (!may_go) continue;
         // The shapes first: on the snake they turn down 60% of the candidates, the link check
@@ -280,7 +288,7 @@ class Improver {
         const double a = after_collapse(h, len[at] < kSpeck * h_);
         if (a < best_thin && a <= ring_thinness(from) && ht::collapse_ok(m_, h)) best_thin = a, best = h;
       }
-      if (!best.is_valid()) continue;
+      if (!best.is_valid() || (near_a_crease(m_.from_vertex_handle(best)) && !surface_kept(best))) continue;
       ht::collapse(m_, best);
       ++done;
     }
@@ -311,7 +319,7 @@ class Improver {
       }
       if (thinness(q[0], q[1], q[2]) > kNeedleCos || glm::dot(unit_normal(q[0], q[1], q[2]), ring_normal(v)) < kTurnCos)
         continue;
-      if (!ht::collapse_ok(m_, h)) continue;
+      if (!ht::collapse_ok(m_, h) || (near_a_crease(v) && !surface_kept(h))) continue;
       ht::collapse(m_, h);
       ++done;
     }
@@ -331,6 +339,10 @@ class Improver {
     if (after >= before - 1e-12 || after > kDegenerateCos) return false;
     const glm::dvec3 n1 = unit_normal(pa, pb, pc), n2 = unit_normal(pb, pa, pd);
     if (glm::dot(n1, n2) < kCoplanarCos && !cap_flip(pa, pb, pc, pd)) return false;  // a crease or a tight bend keeps its edge
+    if (beside_crease(a) || beside_crease(b) || beside_crease(c) || beside_crease(d)) {
+      const std::array<glm::dvec3, 3> faces[4] = {{pa, pb, pc}, {pb, pa, pd}, {pa, pd, pc}, {pd, pb, pc}};
+      if (!no_further_off(faces, 2)) return false;
+    }
     const glm::dvec3 up = n1 + n2;
     if (glm::dot(unit_normal(pa, pd, pc), up) <= 0 || glm::dot(unit_normal(pd, pb, pc), up) <= 0) return false;
     if (!ht::flip_ok(m_, e)) return false;
@@ -384,6 +396,26 @@ class Improver {
       thin[fi] = thinness(p(c[0]), p(c[1]), p(c[2])) > kAimCos;
     });
     return thin;
+  }
+
+  // A vertex whose Newton step was long (kOffCells cells or more: near a crease, the field's
+  // kink) goes back when it ended off the surface, more than kOffCells cells by |f - T| over the
+  // slope along its normal; a short step lands within about the curvature times its square.
+  void stay_on_surface(const std::vector<std::uint32_t>& movers, const std::vector<glm::dvec3>& dirs,
+                       const std::vector<glm::dvec3>& tangential, const std::vector<glm::dvec3>& old,
+                       std::vector<glm::dvec3>& now) {
+    if (!creases_near_) return;  // a field without creases has no kink to stop at
+    std::vector<std::uint32_t> check;
+    std::vector<glm::dvec3> at, dir;
+    for (std::size_t i = 0; i < movers.size(); ++i)
+      if (now[movers[i]] != old[movers[i]] && glm::length(now[movers[i]] - tangential[i]) >= kOffCells * h_) {
+        check.push_back(std::uint32_t(i));
+        at.push_back(now[movers[i]]);
+        dir.push_back(dirs[i]);
+      }
+    const std::vector<double>& off = off_.points(at, dir);
+    for (std::size_t k = 0; k < check.size(); ++k)
+      if (!(off[k] <= kOffCells * h_)) now[movers[check[k]]] = old[movers[check[k]]];
   }
 
   // One Jacobi step of tangential relaxation with projection, then the moves that hurt undone.
@@ -455,23 +487,57 @@ class Improver {
       if (moves[i]) movers.push_back(who[i]), targets.push_back(moved[i]), normals_of.push_back(dirs[i]);
     std::vector<double> slopes(movers.size());
     for (std::size_t i = 0; i < movers.size(); ++i) slopes[i] = m_.property(slope_, VH{int(movers[i])});
-    project(targets, normals_of, slopes);
+    const std::vector<glm::dvec3> tangential = creases_near_ ? targets : std::vector<glm::dvec3>();
+    off_.project(targets, normals_of, slopes, o_.newton_steps);
     for (std::size_t i = 0; i < movers.size(); ++i) m_.property(slope_, VH{int(movers[i])}) = slopes[i];
     // Positions before and after, indexed like the mesh's vertices but filled only where read.
     std::vector<glm::dvec3> old(m_.n_vertices()), now(m_.n_vertices());
     for (const std::uint32_t v : ring) old[v] = now[v] = p(VH(int(v)));
     for (std::size_t i = 0; i < movers.size(); ++i)
       if (!std::isnan(targets[i].x)) now[movers[i]] = targets[i];
+    stay_on_surface(movers, normals_of, tangential, old, now);
     // Undo the moves of every face that turned or got much thinner, until none does. After the
     // first round only the faces around a vertex just put back can have turned bad: the others
     // are as they were checked.
+    // Beside a crease, faces a move takes further off the surface than kOffCells or than they
+    // were are undone too (no_further_off, face by face).
+    std::vector<std::uint8_t> too_far(creases_near_ ? m_.n_faces() : 0, 0);
+    if (creases_near_) {
+      std::vector<std::uint32_t> near;  // faces with a corner beside a crease and one that moved
+      std::vector<std::array<glm::dvec3, 3>>& both = faces_;
+      both.clear();
+      for (const std::uint32_t f : faces) {
+        const auto k = corners(FH(int(f)));
+        bool beside = false, moved_one = false;
+        for (const VH v : k) {
+          beside |= beside_crease(v);
+          moved_one |= now[std::size_t(v.idx())] != old[std::size_t(v.idx())];
+        }
+        if (!beside || !moved_one) continue;
+        near.push_back(f);
+        both.push_back({old[std::size_t(k[0].idx())], old[std::size_t(k[1].idx())], old[std::size_t(k[2].idx())]});
+      }
+      for (const std::uint32_t f : near) {
+        const auto k = corners(FH(int(f)));
+        both.push_back({now[std::size_t(k[0].idx())], now[std::size_t(k[1].idx())], now[std::size_t(k[2].idx())]});
+      }
+      const std::vector<double>& off = off_.faces(both);
+      for (std::size_t i = 0; i < near.size(); ++i)
+        too_far[near[i]] = off[near.size() + i] > std::max(off[i], kOffCells * h_);
+    }
     auto turns_bad = [&](std::uint32_t f) {
+      if (!too_far.empty() && too_far[f]) return true;
       const auto k = corners(FH(int(f)));
       const std::size_t i0 = std::size_t(k[0].idx()), i1 = std::size_t(k[1].idx()), i2 = std::size_t(k[2].idx());
       if (now[i0] == old[i0] && now[i1] == old[i1] && now[i2] == old[i2]) return false;
       // Held to its corners' ring normals: a sliver's own normal means nothing.
       const glm::dvec3 ref = normal[i0] + normal[i1] + normal[i2], after = unit_normal(now[i0], now[i1], now[i2]);
       const double t0 = thinness(old[i0], old[i1], old[i2]), t1 = thinness(now[i0], now[i1], now[i2]);
+      // Beside a crease a face stays on its sheet: a mover's faces keep to its ring's plane.
+      for (const VH v : k)
+        if (m_.property(near_crease_, v) && now[std::size_t(v.idx())] != old[std::size_t(v.idx())] &&
+            glm::dot(normal[std::size_t(v.idx())], after) < kKeepPlaneCos)
+          return true;
       return glm::dot(ref, after) < kTurnCos * glm::length(ref) || (t1 > t0 && t1 > kWorseCos) || t1 > kDegenerateCos;
     };
     std::vector<std::uint32_t> check = faces, undone;
@@ -503,10 +569,13 @@ class Improver {
   OpenMesh::VPropHandleT<bool> locked_;
   OpenMesh::VPropHandleT<std::uint32_t> origin_;
   OpenMesh::VPropHandleT<double> slope_;  // f's derivative along the vertex normal, NaN until known
-  OpenMesh::VPropHandleT<bool> near_crease_;  // locked as kNearCrease: a short needle edge may take it
+  OpenMesh::VPropHandleT<bool> near_crease_;  // kNearCrease: not locked, but its steps are checked (beside_crease)
+  bool creases_near_ = false;                // some vertex is kNearCrease
+  std::vector<std::array<glm::dvec3, 3>> faces_;  // surface_kept's and relax's scratch
   const BatchField& field_;
   double T_, h_;
   QualityOptions o_;
+  OffSurface off_;
   bool ok_ = false;
 };
 

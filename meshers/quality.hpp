@@ -19,10 +19,13 @@
 //             a move that turns a triangle over or worsens its smallest angle much is undone.
 // Locked vertices (crease points, corners, exact seams, a mesh's boundary, triangles kept from
 // the user's meshes) neither move nor go away, and no edge between two of them is flipped or
-// collapsed, so creases stay sharp and open patches keep their rims (a needle's edge shorter than
-// kShortNeedleEdge cells still collapses a vertex locked only for lying beside a crease:
-// kNearCrease below). A component less than two precisions across on every axis is locked whole:
-// so few triangles fold into each other when collapsed or relaxed, and there is nothing to gain.
+// collapsed, so creases stay sharp and open patches keep their rims. Vertices beside a crease
+// (kNearCrease below) are the pass's too, but a face there may straddle the crease, so their
+// steps are measured (meshers/off_surface.hpp): a collapse or flip that leaves a face's middle
+// further off the surface than the faces it replaces were (or 0.02 cells), or a move that does,
+// is not made, and no long edge there splits. A component less than two precisions across on
+// every axis is locked whole: so few triangles fold into each other when collapsed or relaxed,
+// and there is nothing to gain.
 //
 // The mesh is cut into slabs across its longest axis, kSlabCells precisions thick, at fixed
 // places in space (multiples of the slab's thickness from the origin); the slabs are worked on in
@@ -99,10 +102,10 @@ struct QualityStats {
 };
 
 /// A `locked` value: the vertex lies beside a crease (the polygonizer's two rings around its
-/// crease points). It stays like a locked one, except that a needle's edge shorter than
-/// kShortNeedleEdge precisions may collapse it into its neighbour: beside a crease, two crossings
-/// near one grid point are otherwise a sliver for good, and a move that short changes no crease.
-/// Any other nonzero value locks the vertex outright.
+/// crease points). It is not locked, but every step that moves it, takes it away or flips an
+/// edge near it is held to the surface (above); a needle's edge shorter than kShortNeedleEdge
+/// precisions may collapse it even into a crease point's neighbour. Any other nonzero value
+/// locks the vertex outright.
 inline constexpr std::uint8_t kNearCrease = 2;
 inline constexpr double kShortNeedleEdge = 0.15;
 

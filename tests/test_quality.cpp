@@ -8,6 +8,7 @@
 #include "nodes/mesh_leaf.hpp"
 #include "runtime/builder.hpp"
 #include "runtime/optimize.hpp"
+#include "runtime/scene.hpp"
 #include "tests/support/random_tree.hpp"
 #include "tests/support/test_support.hpp"
 #include "tools/scenes.hpp"
@@ -19,6 +20,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <filesystem>
 #include <string>
 #include <tuple>
 #include <vector>
@@ -113,7 +115,11 @@ TEST(Quality, RandomTreesKeepTopologyVolumeAndSurface) {
     ++meshed;
     const std::string what = "trial " + std::to_string(trial);
     expect_kept(off, on, what);
-    EXPECT_LE(on.checks.face_error_max, off.checks.face_error_max * 1.05 + 1e-9) << what;
+    // Within 10% of the extraction's largest face error: since the vertices beside creases are
+    // the pass's too (guarded: no face further off the surface than it was or 0.02 cells), one
+    // tree of the 40 (a blend of eight.off where the field is weak, the face 0.33 cells off as
+    // extracted) ends 6.8% further off; the crease scenes' largest errors stay or shrink.
+    EXPECT_LE(on.checks.face_error_max, off.checks.face_error_max * 1.10 + 1e-9) << what;
     const std::vector<double> a1 = min_angles(on.mesh);
     // No fold with or without the pass, creases or not (the crease step's are unfolded).
     EXPECT_EQ(off.checks.self_intersecting_pairs, 0u) << what;
@@ -133,8 +139,9 @@ TEST(Quality, RandomTreesKeepTopologyVolumeAndSurface) {
 }
 
 TEST(Quality, CreasesStaySharp) {
-  // The feature step's crease points and two rings around them are the pass's constraints: the
-  // error figures of tests/test_features.cpp hold with the pass on.
+  // The feature step's crease points are the pass's constraints, and the two rings around them
+  // take only steps that keep their faces on the surface (quality.hpp kNearCrease): the error
+  // figures of tests/test_features.cpp hold with the pass on.
   Builder b(kT);
   const Tree t = b.build(b.subtract({b.point({-0.2, 0, 0}, {1.0}), b.point({0.4, 0.05, 0.1}, {0.8})}, BooleanMode::MinMax));
   for (double h : {0.04, 0.02}) {
@@ -145,11 +152,42 @@ TEST(Quality, CreasesStaySharp) {
     EXPECT_LE(on.checks.face_error_mean, off.checks.face_error_mean * 1.05) << h;
     std::printf("crease scene h=%g: first percentile %.2f, smallest %.2f degrees, %zu triangles\n", h,
                 on.checks.min_angle_p1, on.checks.min_angle, on.checks.triangles);
-    // Beside the crease: a needle's short edge may still take a vertex of the two rings
-    // (quality.hpp kNearCrease), and a cap flips when its flip keeps its sound neighbour's plane.
-    // Before, the first percentile was 7.6 and 10.9 degrees, the smallest angle 0.08 and 0.16.
-    EXPECT_GT(on.checks.min_angle_p1, h > 0.03 ? 10.0 : 14.0) << h;
-    EXPECT_GT(on.checks.min_angle, 1.0) << h;
+    // Beside the crease. With the two rings locked the first percentile was 10.9 and 15.1
+    // degrees, the smallest angle 1.53 and 1.07 (7.6, 10.9, 0.08 and 0.16 before the short
+    // needle edges and cap flips there); now 18.8, 24.7, 1.53 and 3.19.
+    EXPECT_GT(on.checks.min_angle_p1, h > 0.03 ? 17.0 : 22.0) << h;
+    EXPECT_GT(on.checks.min_angle, 1.4) << h;
+  }
+}
+
+TEST(Quality, CreaseScenesAreWellShapedBesideTheirCreases) {
+  // Globally polygonized crease scenes: examples/carved_box.json (a cropped ball minus eight
+  // balls) and bunny00 united with a ball and minus another (the OpenVDB peer's csg). With the
+  // two rings around crease points locked, the carved box's smooth triangles had a smallest
+  // angle of 1.93 degrees and a first percentile of 14.8, the csg's made triangles a first
+  // percentile of 23.0 (OpenVDB's mesher: 27.6); now 7.3, 32.3 and 29.5.
+  struct Scene {
+    const char* name;
+    Tree tree;
+    double h, smooth_min, smooth_p1, made_p1;
+  };
+  Builder b(kT);
+  NodeId csg = b.mesh(test::cgal_mesh("bunny00.off"), {0.05});
+  csg = b.unite({csg, b.point({0.50, -0.22, 0.06}, {0.12 / 0.4542})});
+  csg = b.subtract({csg, b.point({0.10, -0.17, 0.44}, {0.15 / 0.4542})});
+  const Scene scenes[] = {
+      {"carved_box", load_scene(std::filesystem::path(HYBRIDTREE_SOURCE_DIR) / "examples/carved_box.json"), 0.01, 5.0,
+       30.0, 15.0},
+      {"csg", b.build(csg), 0.01, 4.0, 30.0, 28.0}};
+  for (const Scene& s : scenes) {
+    const Meshed on = mesh(s.tree, s.h, true);
+    const MeshChecks& c = on.checks;
+    EXPECT_TRUE(c.watertight()) << s.name;
+    EXPECT_EQ(c.self_intersecting_pairs, 0u) << s.name;
+    EXPECT_GT(on.stats.crease_edges, 0u) << s.name;
+    EXPECT_GT(c.smooth_min_angle, s.smooth_min) << s.name;
+    EXPECT_GT(c.smooth_min_angle_p1, s.smooth_p1) << s.name;
+    EXPECT_GT(c.made_min_angle_p1, s.made_p1) << s.name;
   }
 }
 
