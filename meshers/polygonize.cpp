@@ -9,13 +9,11 @@
 #include "meshers/brick_region.hpp"
 #include "meshers/features.hpp"
 #include "meshers/piece_cache.hpp"
+#include "meshers/polygonize_passes.hpp"
 #include "meshers/polygonize_reuse.hpp"
 #include "meshers/quality.hpp"
-#include "meshers/relax.hpp"
-#include "meshers/self_intersections.hpp"
 #include "meshers/snap.hpp"
 #include "meshers/surface_field.hpp"
-#include "meshers/unfold.hpp"
 
 #include "runtime/tape.hpp"
 #include "runtime/tape_eval.hpp"
@@ -51,10 +49,6 @@ using brick::kInside;
 using brick::kOutside;
 
 constexpr double kSnap = 0.01;     // of a grid edge: a vertex this near a grid point merges there
-constexpr int kUntangleRounds = 4;  // of sliding crease points where the feature step folded
-constexpr int kUnfoldRounds = 12;   // of collapsing the folds sliding left
-constexpr double kFoldLockCells = 2.0;  // around a fold the quality pass left, kept as extracted on its second run
-constexpr int kFoldTurns = 3;       // of collapsing, then relaxing, what stays folded
 
 double seconds_since(std::chrono::steady_clock::time_point t0) {
   return std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
@@ -125,18 +119,6 @@ BlockTapes block_tapes(const std::shared_ptr<const Graph>& graph, NodeId root, d
   return out;
 }
 
-// The root's tape, compiled the first time a phase needs it.
-struct RootField {
-  std::shared_ptr<const Graph> graph;
-  NodeId root;
-  double T;
-  std::shared_ptr<const TapeEvaluator> eval;
-  const TapeEvaluator& get() {
-    if (!eval) eval = std::make_shared<const TapeEvaluator>(std::make_shared<const Tape>(compile_tape(graph, root, T)));
-    return *eval;
-  }
-};
-
 // Vertices a hair from a grid point (a surface through grid points: faces on grid planes) merge
 // into one there (meshers/snap.hpp); `snapped` receives the merged vertices put on a crease.
 void snap_phase(const Grid& grid, const std::vector<EdgeVertex>& all, const FeatureOptions& features, SurfaceField& field,
@@ -159,118 +141,9 @@ void snap_phase(const Grid& grid, const std::vector<EdgeVertex>& all, const Feat
   snap_to_grid_points(mesh, near, normals, snapped, gradient_of(field), field.threshold(), grid.h, options, &stats.snap);
 }
 
-// Folds left by the crease step or the quality pass: collapsed (meshers/unfold.hpp), and where
-// collapses are stuck, the vertices around them relaxed apart (meshers/relax.hpp untangle, crease
-// points sliding along their crease), in turns. `pairs` holds every intersecting pair and
-// receives those left.
-void resolve_folds(TriangleMesh& mesh, std::vector<std::uint8_t>& crease, const TapeEvaluator& eval, double T, double h,
-                   std::vector<std::array<std::uint32_t, 2>>& pairs, PolygonizeStats& stats) {
-  for (int turn = 0; turn < kFoldTurns && !pairs.empty(); ++turn) {
-    const UnfoldStats st = unfold(mesh, crease, pairs, kUnfoldRounds);
-    stats.unfold.collapses += st.collapses;
-    stats.unfold.seconds += st.seconds;
-    if (pairs.empty()) break;
-    Aabb near;
-    for (const auto& pair : pairs)
-      for (const std::uint32_t t : pair)
-        for (int k = 0; k < 3; ++k) near.grow(mesh.positions[mesh.triangles[t][k]]);
-    if (crease.size() != mesh.positions.size()) crease.resize(mesh.positions.size(), 0);
-    const std::vector<std::uint8_t> none(mesh.positions.size(), 0);
-    const auto left = untangle(mesh, none, gradient_of(eval), T, near.expanded(2.0 * h), kUntangleRounds, crease);
-    // untangle searched only its region; the pairs outside it are those unfold left there.
-    std::vector<std::array<std::uint32_t, 2>> all = left;
-    for (const auto& pair : pairs) {
-      bool inside = false;
-      for (const std::uint32_t t : pair)
-        for (int k = 0; k < 3; ++k) inside |= near.expanded(2.0 * h).contains(mesh.positions[mesh.triangles[t][k]]);
-      if (!inside) all.push_back(pair);
-    }
-    pairs = std::move(all);
-  }
-  stats.crease_intersections = pairs.size();
-}
-
-// Creases: the edges that cross them split (meshers/features.hpp); where the pieces fold into
-// each other, crease points slide along their crease and the vertices away from it relax
-// (meshers/relax.hpp untangle), and what stays folded is collapsed (meshers/unfold.hpp).
-void crease_phase(RootField& field, const FeatureOptions& features, double h, TriangleMesh& mesh,
-                  const std::vector<glm::vec3>& normals, std::vector<std::uint8_t>& on_crease, PolygonizeStats& stats) {
-  bool any_normal = false;
-  for (const glm::vec3& n : normals) any_normal |= n != glm::vec3(0.0f);
-  if (!any_normal) return;
-  const TapeEvaluator& eval = field.get();
-  const CreaseStats crease = split_creases(mesh, normals, eval, field.T, h, features, &on_crease);
-  stats.crease_edges = crease.split_edges;
-  stats.crease_candidates = crease.candidate_edges;
-  stats.crease_spread = crease.spread_edges;
-  stats.corner_vertices = crease.corners;
-  if (crease.split_edges + crease.corners == 0) return;
-  Aabb near;
-  for (std::size_t v = 0; v < on_crease.size(); ++v)
-    if (on_crease[v]) near.grow(mesh.positions[v]);
-  const std::vector<std::uint8_t> none(mesh.positions.size(), 0);
-  // Every triangle the step cut has a crease point for a corner; the rest are as extracted.
-  auto left = untangle(mesh, none, gradient_of(eval), field.T, near.expanded(2.0 * h), kUntangleRounds, on_crease,
-                       on_crease);
-  stats.unfold.pairs_before = stats.crease_intersections = left.size();
-  resolve_folds(mesh, on_crease, eval, field.T, h, left, stats);
-}
-
-// The quality pass with the crease points kept as the feature step left them and two rings
-// around them worked on only by steps that keep their faces on the surface; then, since a move can push a face through a sheet close by (a thin wing, two
-// sheets beside a crease), what it left intersecting is collapsed away too.
-void quality_phase(SurfaceField& field, RootField& root_field, double h, const QualityOptions& options,
-                   MemoryBudget& budget, TriangleMesh& mesh, const std::vector<std::uint8_t>& on_crease,
-                   const QualityReuse* reuse, PolygonizeStats& stats) {
-  const MemoryReservation held(budget, kQualityBytesPerVertex * double(mesh.positions.size()),
-                               "the quality pass on " + std::to_string(mesh.positions.size()) + " vertices");
-  const double T = root_field.T;
-  const BatchField on_bricks = [&field](std::span<const glm::dvec3> p, std::span<double> v) { field.values(p, v); };
-  std::vector<std::uint8_t> keep = on_crease;
-  if (!keep.empty()) {
-    const std::vector<std::uint8_t> any(keep.size(), 1), near = rings_around(mesh, on_crease, any, 2);
-    for (std::size_t v = 0; v < keep.size(); ++v)
-      if (!keep[v] && near[v]) keep[v] = kNearCrease;
-  }
-  const TriangleMesh extracted = mesh;
-  std::vector<std::uint8_t> crease_after;
-  auto improve = [&](const std::vector<std::uint8_t>& locked) {
-    QualityStats st;
-    improve_quality(mesh, locked, on_crease, on_bricks, T, h, options, &st, &crease_after, reuse);
-    stats.quality += st;
-    // With a cache, the regions of the mesh found clean by an earlier run are not searched again.
-    const bool clean = reuse && brick::clean_by_regions(mesh, kSlabCells * h, *reuse->cache);
-    auto left = clean ? std::vector<std::array<std::uint32_t, 2>>{}
-                      : find_self_intersections(mesh, std::numeric_limits<std::size_t>::max()).examples;
-    stats.quality_intersections += left.size();
-    stats.crease_intersections = left.size();
-    if (!left.empty()) resolve_folds(mesh, crease_after, root_field.get(), T, h, left, stats);
-    return left;
-  };
-  const auto left = improve(keep);
-  if (left.empty()) return;
-  // Where folds are left (two sheets closer than a cell, pushed through each other), the pass runs
-  // again from the extracted mesh with the vertices around them kept where extraction put them.
-  std::vector<Aabb> folds;
-  for (const auto& pair : left) {
-    Aabb box;
-    for (const std::uint32_t t : pair)
-      for (int k = 0; k < 3; ++k) box.grow(mesh.positions[mesh.triangles[t][k]]);
-    folds.push_back(box.expanded(kFoldLockCells * h));
-  }
-  mesh = extracted;
-  keep.resize(mesh.positions.size(), 0);
-  for (std::size_t v = 0; v < keep.size(); ++v)
-    for (const Aabb& box : folds)
-      if (box.contains(mesh.positions[v])) keep[v] = 1;
-  ++stats.quality.retries;
-  improve(keep);
-}
-
-}  // namespace
-
-TriangleMesh polygonize(std::shared_ptr<const Graph> graph, NodeId root, double T, const PolygonizeOptions& options,
-                        PolygonizeStats* stats_out) {
+// One polygonization; `locks` as quality_phase takes them, `folds` receives what it returns.
+TriangleMesh polygonize_once(std::shared_ptr<const Graph> graph, NodeId root, double T, const PolygonizeOptions& options,
+                             std::span<const Aabb> locks, std::vector<Aabb>& folds, PolygonizeStats* stats_out) {
   PolygonizeStats stats;
   const Graph& g = *graph;
   const double h = options.precision;
@@ -576,10 +449,43 @@ TriangleMesh polygonize(std::shared_ptr<const Graph> graph, NodeId root, double 
   //    A patch (filtered or clipped) is the local strategies' to remesh with its bands.
   if (options.quality.enabled && !options.brick_filter && !clipped) {
     const QualityReuse reuse = keys.empty() ? QualityReuse{} : brick::quality_reuse(view, *options.pieces);
-    quality_phase(field, root_field, h, options.quality, budget, mesh, on_crease, keys.empty() ? nullptr : &reuse, stats);
+    folds = quality_phase(field, root_field, h, options.quality, budget, mesh, on_crease, keys.empty() ? nullptr : &reuse,
+                          locks, stats);
   }
   if (options.progress) options.progress(1.0);
   if (stats_out) *stats_out = stats;
+  return mesh;
+}
+
+}  // namespace
+
+TriangleMesh polygonize(std::shared_ptr<const Graph> graph, NodeId root, double T, const PolygonizeOptions& options,
+                        PolygonizeStats* stats_out) {
+  std::vector<Aabb> folds;
+  PolygonizeStats first;
+  TriangleMesh mesh = polygonize_once(graph, root, T, options, {}, folds, &first);
+  if (folds.empty()) {
+    if (stats_out) *stats_out = first;
+    return mesh;
+  }
+  // Where folds are left (two sheets closer than a cell, pushed through each other), the pass runs
+  // again from the extracted mesh with the vertices around them kept where extraction put them.
+  // The extracted mesh is made again (extraction is deterministic) rather than kept through the
+  // pass: a copy held beside the pass's slabs was up to a sixth of a global run's peak memory.
+  mesh = TriangleMesh();
+  PolygonizeOptions again = options;
+  again.progress = nullptr;
+  PolygonizeStats second;
+  std::vector<Aabb> left;  // none: a run with locks does not ask for another
+  mesh = polygonize_once(std::move(graph), root, T, again, folds, left, &second);
+  second.quality += first.quality;
+  ++second.quality.retries;
+  second.quality_intersections += first.quality_intersections;
+  second.seconds_classify += first.seconds_classify, second.seconds_sample += first.seconds_sample;
+  second.seconds_extract += first.seconds_extract, second.seconds_merge += first.seconds_merge;
+  second.seconds_features += first.seconds_features;
+  if (options.progress) options.progress(1.0);
+  if (stats_out) *stats_out = second;
   return mesh;
 }
 

@@ -1,0 +1,119 @@
+#include "meshers/polygonize_passes.hpp"
+
+#include "meshers/piece_cache.hpp"
+#include "meshers/polygonize_reuse.hpp"
+#include "meshers/relax.hpp"
+#include "meshers/self_intersections.hpp"
+#include "meshers/unfold.hpp"
+
+#include <array>
+#include <limits>
+#include <string>
+
+namespace ht {
+
+namespace {
+
+constexpr int kUntangleRounds = 4;  // of sliding crease points where the feature step folded
+constexpr int kUnfoldRounds = 12;   // of collapsing the folds sliding left
+constexpr double kFoldLockCells = 2.0;  // around a fold the quality pass left, kept as extracted on its second run
+constexpr int kFoldTurns = 3;       // of collapsing, then relaxing, what stays folded
+
+// Folds left by the crease step or the quality pass: collapsed (meshers/unfold.hpp), and where
+// collapses are stuck, the vertices around them relaxed apart (meshers/relax.hpp untangle, crease
+// points sliding along their crease), in turns. `pairs` holds every intersecting pair and
+// receives those left.
+void resolve_folds(TriangleMesh& mesh, std::vector<std::uint8_t>& crease, const TapeEvaluator& eval, double T, double h,
+                   std::vector<std::array<std::uint32_t, 2>>& pairs, PolygonizeStats& stats) {
+  for (int turn = 0; turn < kFoldTurns && !pairs.empty(); ++turn) {
+    const UnfoldStats st = unfold(mesh, crease, pairs, kUnfoldRounds);
+    stats.unfold.collapses += st.collapses;
+    stats.unfold.seconds += st.seconds;
+    if (pairs.empty()) break;
+    Aabb near;
+    for (const auto& pair : pairs)
+      for (const std::uint32_t t : pair)
+        for (int k = 0; k < 3; ++k) near.grow(mesh.positions[mesh.triangles[t][k]]);
+    if (crease.size() != mesh.positions.size()) crease.resize(mesh.positions.size(), 0);
+    const std::vector<std::uint8_t> none(mesh.positions.size(), 0);
+    const auto left = untangle(mesh, none, gradient_of(eval), T, near.expanded(2.0 * h), kUntangleRounds, crease);
+    // untangle searched only its region; the pairs outside it are those unfold left there.
+    std::vector<std::array<std::uint32_t, 2>> all = left;
+    for (const auto& pair : pairs) {
+      bool inside = false;
+      for (const std::uint32_t t : pair)
+        for (int k = 0; k < 3; ++k) inside |= near.expanded(2.0 * h).contains(mesh.positions[mesh.triangles[t][k]]);
+      if (!inside) all.push_back(pair);
+    }
+    pairs = std::move(all);
+  }
+  stats.crease_intersections = pairs.size();
+}
+
+}  // namespace
+
+void crease_phase(RootField& field, const FeatureOptions& features, double h, TriangleMesh& mesh,
+                  const std::vector<glm::vec3>& normals, std::vector<std::uint8_t>& on_crease, PolygonizeStats& stats) {
+  bool any_normal = false;
+  for (const glm::vec3& n : normals) any_normal |= n != glm::vec3(0.0f);
+  if (!any_normal) return;
+  const TapeEvaluator& eval = field.get();
+  const CreaseStats crease = split_creases(mesh, normals, eval, field.T, h, features, &on_crease);
+  stats.crease_edges = crease.split_edges;
+  stats.crease_candidates = crease.candidate_edges;
+  stats.crease_spread = crease.spread_edges;
+  stats.corner_vertices = crease.corners;
+  if (crease.split_edges + crease.corners == 0) return;
+  Aabb near;
+  for (std::size_t v = 0; v < on_crease.size(); ++v)
+    if (on_crease[v]) near.grow(mesh.positions[v]);
+  const std::vector<std::uint8_t> none(mesh.positions.size(), 0);
+  // Every triangle the step cut has a crease point for a corner; the rest are as extracted.
+  auto left = untangle(mesh, none, gradient_of(eval), field.T, near.expanded(2.0 * h), kUntangleRounds, on_crease,
+                       on_crease);
+  stats.unfold.pairs_before = stats.crease_intersections = left.size();
+  resolve_folds(mesh, on_crease, eval, field.T, h, left, stats);
+}
+
+std::vector<Aabb> quality_phase(SurfaceField& field, RootField& root_field, double h, const QualityOptions& options,
+                                MemoryBudget& budget, TriangleMesh& mesh, const std::vector<std::uint8_t>& on_crease,
+                                const QualityReuse* reuse, std::span<const Aabb> locks, PolygonizeStats& stats) {
+  const MemoryReservation held(budget, kQualityBytesPerVertex * double(mesh.positions.size()),
+                               "the quality pass on " + std::to_string(mesh.positions.size()) + " vertices");
+  const double T = root_field.T;
+  const BatchField on_bricks = [&field](std::span<const glm::dvec3> p, std::span<double> v) { field.values(p, v); };
+  std::vector<std::uint8_t> keep = on_crease;
+  if (!keep.empty()) {
+    const std::vector<std::uint8_t> any(keep.size(), 1), near = rings_around(mesh, on_crease, any, 2);
+    for (std::size_t v = 0; v < keep.size(); ++v)
+      if (!keep[v] && near[v]) keep[v] = kNearCrease;
+  }
+  if (!locks.empty()) {
+    keep.resize(mesh.positions.size(), 0);
+    for (std::size_t v = 0; v < keep.size(); ++v)
+      for (const Aabb& box : locks)
+        if (box.contains(mesh.positions[v])) keep[v] = 1;
+  }
+  std::vector<std::uint8_t> crease_after;
+  QualityStats st;
+  improve_quality(mesh, keep, on_crease, on_bricks, T, h, options, &st, &crease_after, reuse);
+  stats.quality += st;
+  // With a cache, the regions of the mesh found clean by an earlier run are not searched again.
+  const bool clean = reuse && brick::clean_by_regions(mesh, kSlabCells * h, *reuse->cache);
+  auto left = clean ? std::vector<std::array<std::uint32_t, 2>>{}
+                          : find_self_intersections(mesh, std::numeric_limits<std::size_t>::max()).examples;
+  stats.quality_intersections += left.size();
+  stats.crease_intersections = left.size();
+  if (!left.empty()) resolve_folds(mesh, crease_after, root_field.get(), T, h, left, stats);
+  std::vector<Aabb> folds;
+  if (!locks.empty()) return folds;
+  for (const auto& pair : left) {
+    Aabb box;
+    for (const std::uint32_t t : pair)
+      for (int k = 0; k < 3; ++k) box.grow(mesh.positions[mesh.triangles[t][k]]);
+    folds.push_back(box.expanded(kFoldLockCells * h));
+  }
+  return folds;
+}
+
+}  // namespace ht
