@@ -339,13 +339,14 @@ class Improver {
     if (after >= before - 1e-12 || after > kDegenerateCos) return false;
     const glm::dvec3 n1 = unit_normal(pa, pb, pc), n2 = unit_normal(pb, pa, pd);
     if (glm::dot(n1, n2) < kCoplanarCos && !cap_flip(pa, pb, pc, pd)) return false;  // a crease or a tight bend keeps its edge
+    const glm::dvec3 up = n1 + n2;
+    if (glm::dot(unit_normal(pa, pd, pc), up) <= 0 || glm::dot(unit_normal(pd, pb, pc), up) <= 0) return false;
+    if (!ht::flip_ok(m_, e)) return false;
+    // Last, as it asks the field: beside a crease the pair may straddle it.
     if (beside_crease(a) || beside_crease(b) || beside_crease(c) || beside_crease(d)) {
       const std::array<glm::dvec3, 3> faces[4] = {{pa, pb, pc}, {pb, pa, pd}, {pa, pd, pc}, {pd, pb, pc}};
       if (!no_further_off(faces, 2)) return false;
     }
-    const glm::dvec3 up = n1 + n2;
-    if (glm::dot(unit_normal(pa, pd, pc), up) <= 0 || glm::dot(unit_normal(pd, pb, pc), up) <= 0) return false;
-    if (!ht::flip_ok(m_, e)) return false;
     ht::flip(m_, e);
     return true;
   }
@@ -496,11 +497,8 @@ class Improver {
     for (std::size_t i = 0; i < movers.size(); ++i)
       if (!std::isnan(targets[i].x)) now[movers[i]] = targets[i];
     stay_on_surface(movers, normals_of, tangential, old, now);
-    // Undo the moves of every face that turned or got much thinner, until none does. After the
-    // first round only the faces around a vertex just put back can have turned bad: the others
-    // are as they were checked.
     // Beside a crease, faces a move takes further off the surface than kOffCells or than they
-    // were are undone too (no_further_off, face by face).
+    // were are marked: their moves are undone below with the others'.
     std::vector<std::uint8_t> too_far(creases_near_ ? m_.n_faces() : 0, 0);
     if (creases_near_) {
       std::vector<std::uint32_t> near;  // faces with a corner beside a crease and one that moved
@@ -525,6 +523,9 @@ class Improver {
       for (std::size_t i = 0; i < near.size(); ++i)
         too_far[near[i]] = off[near.size() + i] > std::max(off[i], kOffCells * h_);
     }
+    // Undo the moves of every face that turned or got much thinner, until none does. After the
+    // first round only the faces around a vertex just put back can have turned bad: the others
+    // are as they were checked.
     auto turns_bad = [&](std::uint32_t f) {
       if (!too_far.empty() && too_far[f]) return true;
       const auto k = corners(FH(int(f)));
