@@ -423,15 +423,22 @@ class Improver {
   void relax(QualityStats& st) {
     // Only the corners of thin faces move: the rest is as good as relaxation makes it. The work
     // is on them, their rings (whose normals judge the moves) and the faces around them.
-    std::vector<std::uint32_t> who;
+    // Per vertex: 1 when locked or next to a locked vertex (near_locked, found from the few
+    // locked vertices' rings rather than every candidate's), 2 when it moves.
     std::vector<std::uint8_t> wanted(m_.n_vertices(), 0);
+    for (const VH v : m_.vertices())
+      if (locked(v)) {
+        wanted[std::size_t(v.idx())] = 1;
+        for (const VH w : m_.vv_range(v)) wanted[std::size_t(w.idx())] = 1;
+      }
     const std::vector<std::uint8_t> thin = thin_faces();
     for (std::size_t f = 0; f < thin.size(); ++f)
       if (thin[f])
         for (const VH v : corners(FH{int(f)}))
-          if (!wanted[std::size_t(v.idx())] && !locked(v) && !near_locked(v))
-            wanted[std::size_t(v.idx())] = 1, who.push_back(std::uint32_t(v.idx()));
-    std::sort(who.begin(), who.end());
+          if (!wanted[std::size_t(v.idx())]) wanted[std::size_t(v.idx())] = 2;
+    std::vector<std::uint32_t> who;  // ascending
+    for (std::uint32_t v = 0; v < wanted.size(); ++v)
+      if (wanted[v] == 2) who.push_back(v);
     std::vector<std::uint32_t> faces, ring;
     std::vector<std::uint8_t> face_seen(m_.n_faces(), 0), ring_seen(m_.n_vertices(), 0);
     for (const std::uint32_t v : who)
@@ -467,7 +474,7 @@ class Improver {
     // The movers' own rings are done below, with their centroids.
     tbb::parallel_for(std::size_t(0), ring.size(), [&](std::size_t i) {
       glm::dvec3 unused;
-      if (!wanted[ring[i]]) ring_of(VH(int(ring[i])), unused);
+      if (wanted[ring[i]] != 2) ring_of(VH(int(ring[i])), unused);
     });
     tbb::parallel_for(std::size_t(0), who.size(), [&](std::size_t i) {
       const VH v(static_cast<int>(who[i]));  // not VH v(int(x)): clang reads that as a function

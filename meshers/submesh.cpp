@@ -19,17 +19,21 @@ namespace {
 
 // The vertices where the boundary of a set of triangles passes twice (the set touches itself
 // there, a pinch OpenMesh cannot hold), sorted: an undirected edge used once in the set is on its
-// boundary, and a vertex that two such edges leave in the set's orientation is pinched. Edges are
-// sorted as one 64-bit key each, {min, max, whether it leaves max} (so vertex indices must stay
-// under 2^31), which compares faster than arrays of three indices.
-std::vector<std::uint32_t> pinched_vertices(const TriangleMesh& mesh, std::span<const std::uint32_t> tris) {
+// boundary, and a vertex that two such edges leave in the set's orientation is pinched. Only the
+// edges both of whose ends `may_rim` allows are counted: a caller that knows a vertex has all its
+// triangles in the set (so no edge at it is on the boundary) passes over the set's inside. Edges
+// are sorted as one 64-bit key each, {min, max, whether it leaves max} (so vertex indices must
+// stay under 2^31), which compares faster than arrays of three indices.
+template <class MayRim>
+std::vector<std::uint32_t> pinched_vertices(const TriangleMesh& mesh, std::span<const std::uint32_t> tris,
+                                            MayRim&& may_rim) {
   if (mesh.positions.size() > (std::size_t(1) << 31)) throw std::length_error("pinched_vertices: over 2^31 vertices");
   std::vector<std::uint64_t> edges;
-  edges.reserve(3 * tris.size());
   for (const std::uint32_t t : tris)
     for (int k = 0; k < 3; ++k) {
       const std::uint64_t a = mesh.triangles[t][k], b = mesh.triangles[t][(k + 1) % 3];
-      edges.push_back(std::min(a, b) << 33 | std::max(a, b) << 1 | std::uint64_t(a > b));
+      if (may_rim(std::uint32_t(a)) && may_rim(std::uint32_t(b)))
+        edges.push_back(std::min(a, b) << 33 | std::max(a, b) << 1 | std::uint64_t(a > b));
     }
   tbb::parallel_sort(edges.begin(), edges.end());  // plain keys: one order at any thread count
   std::vector<std::uint32_t> leaving;
@@ -46,6 +50,18 @@ std::vector<std::uint32_t> pinched_vertices(const TriangleMesh& mesh, std::span<
   return pinched;
 }
 
+// The one part whose triangles use each vertex (~0u: only untaken triangles), ~1u for several.
+std::vector<std::uint32_t> owners(const TriangleMesh& mesh, std::span<const std::uint32_t> piece_of) {
+  constexpr std::uint32_t kUnseen = ~2u;
+  std::vector<std::uint32_t> owner(mesh.positions.size(), kUnseen);
+  for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t)
+    for (int k = 0; k < 3; ++k) {
+      std::uint32_t& o = owner[mesh.triangles[t][k]];
+      o = o == kUnseen || o == piece_of[t] ? piece_of[t] : ~1u;
+    }
+  return owner;
+}
+
 bool touches(const glm::uvec3& t, const std::vector<std::uint32_t>& sorted_vertices) {
   for (int k = 0; k < 3; ++k)
     if (std::binary_search(sorted_vertices.begin(), sorted_vertices.end(), t[k])) return true;
@@ -53,13 +69,15 @@ bool touches(const glm::uvec3& t, const std::vector<std::uint32_t>& sorted_verti
 }
 
 // The taken triangles must form a manifold: at a pinch the whole fan of the vertex is taken too,
-// until no pinch is left.
+// until no pinch is left. Only vertices an untaken triangle uses can be pinched.
 void widen_past_pinches(const TriangleMesh& mesh, std::vector<std::uint8_t>& taken) {
   for (int round = 0; round < 8; ++round) {
     std::vector<std::uint32_t> tris;
+    std::vector<std::uint8_t> outside(mesh.positions.size(), 0);
     for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t)
       if (taken[t]) tris.push_back(t);
-    const std::vector<std::uint32_t> pinched = pinched_vertices(mesh, tris);
+      else outside[mesh.triangles[t][0]] = outside[mesh.triangles[t][1]] = outside[mesh.triangles[t][2]] = 1;
+    const std::vector<std::uint32_t> pinched = pinched_vertices(mesh, tris, [&](std::uint32_t v) { return outside[v] != 0; });
     if (pinched.empty()) return;
     for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
       if (touches(mesh.triangles[t], pinched)) taken[t] = 1;
@@ -88,32 +106,35 @@ std::vector<int> collected_order(int n, Deleted deleted) {
 }  // namespace
 
 PiecePlan plan_pieces(const TriangleMesh& mesh, std::vector<std::uint32_t> piece_of, std::size_t count) {
-  const std::size_t nv = mesh.positions.size(), nt = mesh.triangles.size();
+  const std::size_t nt = mesh.triangles.size();
   PiecePlan plan;
   plan.of_part.resize(count);
   for (std::uint32_t t = 0; t < nt; ++t)
     if (piece_of[t] != ~0u) plan.of_part[piece_of[t]].push_back(t);
-  // A part pinched at a vertex gives its triangles there back, until no part is pinched.
+  // A part pinched at a vertex gives its triangles there back, until no part is pinched. Only
+  // its rim can be pinched: a vertex all of whose triangles are the part's is inside it. The
+  // vertices of triangles given back join the rim.
+  const std::vector<std::uint32_t> first_owner = owners(mesh, piece_of);
   tbb::parallel_for(std::size_t(0), count, [&](std::size_t i) {
+    std::vector<std::uint32_t> freed;  // sorted: vertices beside triangles the part gave back
+    auto may_rim = [&](std::uint32_t v) { return first_owner[v] != i || std::binary_search(freed.begin(), freed.end(), v); };
     for (int round = 0; round < 8; ++round) {
-      const std::vector<std::uint32_t> pinched = pinched_vertices(mesh, plan.of_part[i]);
+      const std::vector<std::uint32_t> pinched = pinched_vertices(mesh, plan.of_part[i], may_rim);
       if (pinched.empty()) break;
       std::erase_if(plan.of_part[i], [&](std::uint32_t t) {
         const bool drop = touches(mesh.triangles[t], pinched);
-        if (drop) piece_of[t] = ~0u;
+        if (drop) {
+          piece_of[t] = ~0u;
+          for (int k = 0; k < 3; ++k) freed.push_back(mesh.triangles[t][k]);
+        }
         return drop;
       });
+      std::sort(freed.begin(), freed.end());
+      freed.erase(std::unique(freed.begin(), freed.end()), freed.end());
     }
   });
   // A vertex is on a part's rim when a triangle of another part, or of none, uses it.
-  // The one part using a vertex (~0u: only untaken triangles), ~1u for several, ~2u for none yet.
-  constexpr std::uint32_t kUnseen = ~2u;
-  plan.owner.assign(nv, kUnseen);
-  for (std::uint32_t t = 0; t < nt; ++t)
-    for (int k = 0; k < 3; ++k) {
-      std::uint32_t& o = plan.owner[mesh.triangles[t][k]];
-      o = o == kUnseen || o == piece_of[t] ? piece_of[t] : ~1u;
-    }
+  plan.owner = owners(mesh, piece_of);
   for (std::uint32_t t = 0; t < nt; ++t)
     if (piece_of[t] == ~0u) plan.rest.push_back(mesh.triangles[t]);
   return plan;
