@@ -296,7 +296,8 @@ class Improver {
   }
 
   // A vertex of valence 3 at the corner of a needle or a cap (one that sits almost on an edge of
-  // its neighbours' triangle) keeps its neighbours' needles from collapsing: each of their short
+  // its neighbours' triangle) or of a speck (speck_corner) keeps its neighbours' needles from
+  // collapsing: each of their short
   // edges has it as a third common neighbour, which OpenMesh's link check refuses. Removing it
   // leaves its three neighbours' triangle, whichever edge collapses; that triangle must face the
   // way the ring did and not be a needle. Not beside a locked vertex: there the ring may span two
@@ -307,7 +308,7 @@ class Improver {
     for (std::size_t vi = 0; vi < n; ++vi) {
       const VH v{int(vi)};
       if (m_.status(v).deleted() || locked(v) || m_.is_boundary(v) || ht::valence(m_, v) != 3 || near_locked(v)) continue;
-      if (!(ring_thinness(v) > kNeedleCos)) continue;
+      if (!(ring_thinness(v) > kNeedleCos) && !speck_corner(v)) continue;
       // Collapsing v into `to` turns v's face without `to` into the triangle that stays.
       const HH h = m_.halfedge_handle(v);
       const VH to = m_.to_vertex_handle(h);
@@ -324,6 +325,16 @@ class Improver {
       ++done;
     }
     return done;
+  }
+
+  // A corner of a speck: a vertex kShortNeedleEdge cells or nearer to one of its neighbours
+  // (marching tetrahedra's vertices around a grid point the surface passes near, a few
+  // hundredths of a cell apart). Its own triangles may be sound while it keeps its neighbours'
+  // needles from collapsing.
+  bool speck_corner(VH v) const {
+    for (const VH w : m_.vv_range(v))
+      if (glm::length(p(w) - p(v)) < kShortNeedleEdge * h_) return true;
+    return false;
   }
 
   // Flips `e` when that makes its two triangles' thinner one less thin (max-min angle).

@@ -72,7 +72,7 @@ void expect_kept(const Meshed& off, const Meshed& on, const std::string& what) {
 
 TEST(Quality, SnakeTrianglesAreWellShaped) {
   Builder b(kT);
-  const Tree t = b.build(scenes::snake(b, 120));
+  const Tree t = b.build(scenes::snake(b, 250));  // bench/mesh_bench.cpp's MeshSnakeQuality
   const double h = 0.065;
   const Meshed off = mesh(t, h, false), on = mesh(t, h, true);
   expect_kept(off, on, "snake");
@@ -85,8 +85,10 @@ TEST(Quality, SnakeTrianglesAreWellShaped) {
   // Marching tetrahedra alone: a first percentile near 1 degree (what makes the bound a test).
   EXPECT_LT(percentile(a0, 0.01), 5.0);
   EXPECT_GE(percentile(a1, 0.01), 25.0);
-  // Issue 9's aim away from creases (the snake has none): no triangle under 5 degrees.
-  EXPECT_GE(a1.front(), 5.0);
+  // Issue 9's aim away from creases (the snake has none) is no triangle under 5 degrees. Specks
+  // of marching tetrahedra (vertices a few hundredths of a cell apart around a grid point) left
+  // one at 3.2 degrees here before remove_valence3 took their corners.
+  EXPECT_GE(a1.front(), 15.0);
   // The checks' own percentile (meshers/mesh_checks.hpp), as --stats-json reports it.
   EXPECT_NEAR(on.checks.min_angle_p1, percentile(a1, 0.01), 1e-4);
   EXPECT_NEAR(off.checks.min_angle_p1, percentile(a0, 0.01), 1e-4);
