@@ -79,8 +79,10 @@ MeshLeaf::Accel::Accel(const std::string& name, const std::vector<glm::dvec3>& p
   scene.reset(rtcNewScene(device.get()));
   if (!scene) fail(name, "cannot create an Embree scene");
   // Robust traversal does not lose hits on shared edges, which the parity counts rely on;
-  // high quality spends build time once for the many queries a mesher makes.
-  rtcSetSceneFlags(scene.get(), RTC_SCENE_FLAG_ROBUST);
+  // high quality spends build time once for the many queries a mesher makes. The compact layout
+  // holds bunny00's hierarchy in about 2.5 MiB less (a tenth of a trimmed Boolean's peak on one
+  // thread) for a few percent more time in its queries.
+  rtcSetSceneFlags(scene.get(), RTC_SCENE_FLAG_ROBUST | RTC_SCENE_FLAG_COMPACT);
   rtcSetSceneBuildQuality(scene.get(), RTC_BUILD_QUALITY_HIGH);
   for (std::uint32_t s = 0; s < shells.count; ++s) {
     RTCGeometry geom = rtcNewGeometry(device.get(), RTC_GEOMETRY_TYPE_TRIANGLE);
