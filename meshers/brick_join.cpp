@@ -8,7 +8,7 @@
 
 namespace ht::brick {
 
-std::vector<EdgeVertex> join_bricks(const std::vector<BrickOutput>& outputs, TriangleMesh& mesh) {
+std::vector<EdgeVertex> join_bricks(std::vector<BrickOutput>&& outputs, TriangleMesh& mesh) {
   // Every brick's vertices by edge key, each key's keeper first (one with a crease normal, else
   // the lowest brick): 16-byte references sort faster than the vertices, and (key, rank) is
   // unique, so any sort gives the same order.
@@ -52,6 +52,8 @@ std::vector<EdgeVertex> join_bricks(const std::vector<BrickOutput>& outputs, Tri
     all[vertex[i]] = outputs[b].vertices[refs[i].slot - offset[b]];
     mesh.positions[vertex[i]] = all[vertex[i]].position;
   });
+  std::vector<Ref>().swap(refs);
+  std::vector<std::uint32_t>().swap(vertex);
   // A triangle's keys are its own brick's vertices, which that brick holds sorted by key.
   mesh.triangles.resize(tri_offset.back());
   tbb::parallel_for(std::size_t(0), outputs.size(), [&](std::size_t b) {
@@ -64,7 +66,9 @@ std::vector<EdgeVertex> join_bricks(const std::vector<BrickOutput>& outputs, Tri
       const auto& tri = outputs[b].triangles[t];
       mesh.triangles[tri_offset[b] + t] = {local(tri[0]), local(tri[1]), local(tri[2])};
     }
+    outputs[b] = BrickOutput();
   });
+  std::vector<BrickOutput>().swap(outputs);
   return all;
 }
 

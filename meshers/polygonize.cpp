@@ -423,12 +423,12 @@ TriangleMesh polygonize_once(std::shared_ptr<const Graph> graph, NodeId root, do
 
   // 4. One vertex per edge key across bricks, then vertices a hair from grid points merged.
   t0 = std::chrono::steady_clock::now();
-  // What the bricks made is one mesh now: their outputs, values and cache entries are let go
-  // before the passes that follow hold their own working sets.
-  std::vector<EdgeVertex> all = brick::join_bricks(outputs, mesh);
-  std::vector<BrickOutput>().swap(outputs);
+  // The samples and cache entries are let go before the join, the bricks' outputs during it
+  // (the peak of a global run is here): the passes that follow hold their own working sets.
   std::vector<float>().swap(values);
+  std::vector<float>().swap(region);
   std::vector<std::shared_ptr<const brick::KeptBrick>>().swap(kept);
+  std::vector<EdgeVertex> all = brick::join_bricks(std::move(outputs), mesh);
   std::vector<glm::vec3> normals(all.size());
   for (std::size_t i = 0; i < all.size(); ++i) normals[i] = all[i].normal;
   RootField root_field{graph, root, T, nullptr};

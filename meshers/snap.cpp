@@ -249,36 +249,30 @@ void snap_round(TriangleMesh& mesh, std::vector<std::uint64_t>& near, std::vecto
     index[v] = heads;
     heads += head[v] == v;
   }
-  TriangleMesh out;
-  out.positions.resize(heads);
-  std::vector<glm::vec3> out_normals(heads);
-  std::vector<std::uint8_t> out_crease(heads);
-  std::vector<std::uint64_t> out_near(heads);
-  tbb::parallel_for(std::size_t(0), n, [&](std::size_t v) {
-    if (head[v] != v) return;
+  // In place, in order (a vertex's new index is never above its old one, nor a triangle's): a
+  // copy of the mesh beside it was the peak of a global polygonization.
+  for (std::uint32_t v = 0; v < n; ++v) {
+    if (head[v] != v) continue;
     const std::uint32_t k = index[v];
-    out.positions[k] = mesh.positions[v];
-    out_normals[k] = normals[v];
-    out_crease[k] = crease[v];
-    out_near[k] = touched[v] == 2 ? kFar : near[v];  // a merged vertex is done
-  });
-  std::vector<glm::uvec3> mapped(mesh.triangles.size());
-  tbb::parallel_for(std::size_t(0), mapped.size(), [&](std::size_t i) {
-    const glm::uvec3& t = mesh.triangles[i];
-    mapped[i] = {index[head[t[0]]], index[head[t[1]]], index[head[t[2]]]};
-  });
-  out.triangles.reserve(mapped.size());
-  for (const glm::uvec3& r : mapped) {
+    mesh.positions[k] = mesh.positions[v];
+    normals[k] = normals[v];
+    crease[k] = crease[v];
+    near[k] = touched[v] == 2 ? kFar : near[v];  // a merged vertex is done
+  }
+  mesh.positions.resize(heads);
+  normals.resize(heads);
+  crease.resize(heads);
+  near.resize(heads);
+  std::size_t kept = 0;
+  for (const glm::uvec3& t : mesh.triangles) {
+    const glm::uvec3 r{index[head[t[0]]], index[head[t[1]]], index[head[t[2]]]};
     if (r[0] == r[1] || r[1] == r[2] || r[2] == r[0]) {
       ++st.removed_triangles;
       continue;
     }
-    out.triangles.push_back(r);
+    mesh.triangles[kept++] = r;
   }
-  mesh = std::move(out);
-  near = std::move(out_near);
-  normals = std::move(out_normals);
-  crease = std::move(out_crease);
+  mesh.triangles.resize(kept);
 }
 }  // namespace
 
