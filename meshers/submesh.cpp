@@ -50,6 +50,22 @@ std::vector<std::uint32_t> pinched_vertices(const TriangleMesh& mesh, std::span<
   return pinched;
 }
 
+// Flags the vertices where the mesh itself is open: around a vertex of a closed fan every edge
+// runs once each way, so the sums of the vertices after it and before it along its triangles'
+// edges agree; at a vertex on the mesh's boundary they differ by its next boundary neighbour less
+// its previous one. Exact on manifold meshes; at a non-manifold vertex the sums may cancel.
+std::vector<std::uint8_t> open_vertices(const TriangleMesh& mesh) {
+  std::vector<std::int64_t> balance(mesh.positions.size(), 0);
+  for (const glm::uvec3& t : mesh.triangles)
+    for (int k = 0; k < 3; ++k) {
+      balance[t[k]] += std::int64_t(t[(k + 1) % 3]);
+      balance[t[(k + 1) % 3]] -= std::int64_t(t[k]);
+    }
+  std::vector<std::uint8_t> open(balance.size());
+  for (std::size_t v = 0; v < open.size(); ++v) open[v] = balance[v] != 0;
+  return open;
+}
+
 // The one part whose triangles use each vertex (~0u: only untaken triangles), ~1u for several.
 std::vector<std::uint32_t> owners(const TriangleMesh& mesh, std::span<const std::uint32_t> piece_of) {
   constexpr std::uint32_t kUnseen = ~2u;
@@ -69,15 +85,17 @@ bool touches(const glm::uvec3& t, const std::vector<std::uint32_t>& sorted_verti
 }
 
 // The taken triangles must form a manifold: at a pinch the whole fan of the vertex is taken too,
-// until no pinch is left. Only vertices an untaken triangle uses can be pinched.
+// until no pinch is left. Only the taken triangles' rim can be pinched: vertices an untaken
+// triangle uses, or where the mesh itself is open.
 void widen_past_pinches(const TriangleMesh& mesh, std::vector<std::uint8_t>& taken) {
+  const std::vector<std::uint8_t> open = open_vertices(mesh);
   for (int round = 0; round < 8; ++round) {
     std::vector<std::uint32_t> tris;
-    std::vector<std::uint8_t> outside(mesh.positions.size(), 0);
+    std::vector<std::uint8_t> rim = open;
     for (std::uint32_t t = 0; t < mesh.triangles.size(); ++t)
       if (taken[t]) tris.push_back(t);
-      else outside[mesh.triangles[t][0]] = outside[mesh.triangles[t][1]] = outside[mesh.triangles[t][2]] = 1;
-    const std::vector<std::uint32_t> pinched = pinched_vertices(mesh, tris, [&](std::uint32_t v) { return outside[v] != 0; });
+      else rim[mesh.triangles[t][0]] = rim[mesh.triangles[t][1]] = rim[mesh.triangles[t][2]] = 1;
+    const std::vector<std::uint32_t> pinched = pinched_vertices(mesh, tris, [&](std::uint32_t v) { return rim[v] != 0; });
     if (pinched.empty()) return;
     for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
       if (touches(mesh.triangles[t], pinched)) taken[t] = 1;
@@ -112,12 +130,15 @@ PiecePlan plan_pieces(const TriangleMesh& mesh, std::vector<std::uint32_t> piece
   for (std::uint32_t t = 0; t < nt; ++t)
     if (piece_of[t] != ~0u) plan.of_part[piece_of[t]].push_back(t);
   // A part pinched at a vertex gives its triangles there back, until no part is pinched. Only
-  // its rim can be pinched: a vertex all of whose triangles are the part's is inside it. The
-  // vertices of triangles given back join the rim.
+  // its rim can be pinched: a vertex all of whose triangles are the part's, where the mesh is
+  // closed, is inside it. The vertices of triangles given back join the rim.
   const std::vector<std::uint32_t> first_owner = owners(mesh, piece_of);
+  const std::vector<std::uint8_t> open = open_vertices(mesh);
   tbb::parallel_for(std::size_t(0), count, [&](std::size_t i) {
     std::vector<std::uint32_t> freed;  // sorted: vertices beside triangles the part gave back
-    auto may_rim = [&](std::uint32_t v) { return first_owner[v] != i || std::binary_search(freed.begin(), freed.end(), v); };
+    auto may_rim = [&](std::uint32_t v) {
+      return first_owner[v] != i || open[v] || std::binary_search(freed.begin(), freed.end(), v);
+    };
     for (int round = 0; round < 8; ++round) {
       const std::vector<std::uint32_t> pinched = pinched_vertices(mesh, plan.of_part[i], may_rim);
       if (pinched.empty()) break;

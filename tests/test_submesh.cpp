@@ -7,6 +7,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <random>
 #include <vector>
 
 namespace ht {
@@ -71,6 +72,60 @@ TEST(Submesh, PartsPutBackUnchangedGiveTheSameSurface) {
     return t;
   };
   EXPECT_EQ(sorted(back), sorted(m));
+}
+
+// An n x n grid of vertices in two triangles a square: open along its four sides, or (closed)
+// wrapped both ways into a torus.
+TriangleMesh grid(int n, bool closed) {
+  TriangleMesh m;
+  const int cols = closed ? n : n - 1;
+  for (int j = 0; j < n; ++j)
+    for (int i = 0; i < n; ++i) {
+      const double u = 2 * M_PI * i / n, v = 2 * M_PI * j / n;
+      m.positions.push_back(closed ? glm::dvec3((2 + std::cos(v)) * std::cos(u), (2 + std::cos(v)) * std::sin(u), std::sin(v))
+                                   : glm::dvec3(i, j, 0));
+    }
+  auto at = [&](int i, int j) { return std::uint32_t(i % n + n * (j % n)); };
+  for (int j = 0; j < cols; ++j)
+    for (int i = 0; i < cols; ++i) {
+      m.triangles.push_back({at(i, j), at(i + 1, j), at(i + 1, j + 1)});
+      m.triangles.push_back({at(i, j), at(i + 1, j + 1), at(i, j + 1)});
+    }
+  return m;
+}
+
+// The vertices of a part's own triangles that two of its boundary edges leave: where it touches
+// itself (found by brute force: every edge against every other).
+std::size_t pinches(const TriangleMesh& part) {
+  std::vector<std::array<std::uint32_t, 2>> edges;
+  for (const glm::uvec3& t : part.triangles)
+    for (int k = 0; k < 3; ++k) edges.push_back({t[k], t[(k + 1) % 3]});
+  std::vector<int> leaving(part.positions.size(), 0);
+  for (const auto& e : edges) {
+    int uses = 0;
+    for (const auto& f : edges) uses += (f[0] == e[0] && f[1] == e[1]) || (f[0] == e[1] && f[1] == e[0]);
+    if (uses == 1) ++leaving[e[0]];
+  }
+  return std::size_t(std::count_if(leaving.begin(), leaving.end(), [](int n) { return n > 1; }));
+}
+
+TEST(Submesh, NoPartTouchesItselfOnOpenOrClosedMeshes) {
+  // Triangles dealt to parts at random touch themselves at vertices everywhere, on the sides of
+  // an open mesh too (where an edge is the mesh's own boundary): every part taken, its pinches
+  // given back or widened, is one fan at each vertex, as OpenMesh's halfedges need.
+  std::mt19937 rng(7);
+  for (const bool closed : {false, true})
+    for (int trial = 0; trial < 40; ++trial) {
+      const TriangleMesh m = grid(7, closed);
+      std::vector<std::uint32_t> piece_of(m.triangles.size());
+      std::vector<std::uint8_t> region(m.positions.size());
+      for (std::uint32_t& p : piece_of) p = rng() % 4 == 0 ? ~0u : std::uint32_t(rng() % 2);
+      for (std::uint8_t& r : region) r = rng() % 4 == 0;
+      const Pieces pieces = take_pieces(m, piece_of, 2), region_parts = take_region(m, region, true);
+      for (const Pieces* p : {&pieces, &region_parts})
+        for (const Submesh& part : p->parts)
+          EXPECT_EQ(pinches(part.mesh), 0u) << (closed ? "torus" : "open grid") << ", trial " << trial;
+    }
 }
 
 TEST(Submesh, SlabsSitAtFixedPlaces) {
