@@ -297,11 +297,10 @@ class Improver {
 
   // A vertex of valence 3 at the corner of a needle or a cap (one that sits almost on an edge of
   // its neighbours' triangle) or of a speck (speck_corner) keeps its neighbours' needles from
-  // collapsing: each of their short
-  // edges has it as a third common neighbour, which OpenMesh's link check refuses. Removing it
-  // leaves its three neighbours' triangle, whichever edge collapses; that triangle must face the
-  // way the ring did and not be a needle. Not beside a locked vertex: there the ring may span two
-  // sheets (a crease), as for collapses.
+  // collapsing: each of their short edges has it as a third common neighbour, which OpenMesh's
+  // link check refuses. Removing it leaves its three neighbours' triangle, whichever edge
+  // collapses; that triangle must face the way the ring did and not be a needle. Not beside a
+  // locked vertex: there the ring may span two sheets (a crease), as for collapses.
   std::size_t remove_valence3() {
     std::size_t done = 0;
     const std::size_t n = m_.n_vertices();

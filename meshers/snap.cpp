@@ -5,7 +5,6 @@
 #include <glm/geometric.hpp>
 #include <glm/mat3x3.hpp>
 #include <glm/matrix.hpp>
-#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <cmath>
