@@ -326,7 +326,7 @@ class Improver {
     return done;
   }
 
-  // A corner of a speck: a vertex kShortNeedleEdge cells or nearer to one of its neighbours
+  // A corner of a speck: a vertex nearer than kShortNeedleEdge cells to one of its neighbours
   // (marching tetrahedra's vertices around a grid point the surface passes near, a few
   // hundredths of a cell apart). Its own triangles may be sound while it keeps its neighbours'
   // needles from collapsing.

@@ -5,10 +5,10 @@
 // each other) and caps where it cuts a tetrahedron's corner off (one angle near 180 degrees).
 // The local strategies leave thin fans beside their exact seams. The pass removes both, on an
 // OpenMesh halfedge mesh with its validity checks:
-//   collapse  first a vertex of valence 3 at the corner of a needle or a cap, or of a speck
-//             (within kShortNeedleEdge cells of a neighbour: its three neighbours' triangle
-//             stays; it is the third common neighbour that makes the link check refuse the
-//             needles beside it), then the shortest edge of a needle, when
+//   collapse  first a vertex of valence 3 at the corner of a needle, a cap or a speck (nearer
+//             than kShortNeedleEdge cells to a neighbour): its three neighbours' triangle stays;
+//             it is the third common neighbour that makes the link check refuse the needles
+//             beside it. Then the shortest edge of a needle, when
 //             is_collapse_ok allows it, no triangle around it turns over, and the smallest angle
 //             around it gets better;
 //   flip      an edge whose two triangles are nearly coplanar, when is_flip_ok allows it and

@@ -21,7 +21,8 @@ namespace {
 // there, a pinch OpenMesh cannot hold), sorted: an undirected edge used once in the set is on its
 // boundary, and a vertex that two such edges leave in the set's orientation is pinched. Only the
 // edges both of whose ends `may_rim` allows are counted: a caller that knows a vertex has all its
-// triangles in the set (so no edge at it is on the boundary) passes over the set's inside. Edges
+// triangles in the set and the mesh closed around it (so no edge at it is on the boundary)
+// passes over the set's inside. Edges
 // are sorted as one 64-bit key each, {min, max, whether it leaves max} (so vertex indices must
 // stay under 2^31), which compares faster than arrays of three indices.
 template <class MayRim>
@@ -53,7 +54,10 @@ std::vector<std::uint32_t> pinched_vertices(const TriangleMesh& mesh, std::span<
 // Flags the vertices where the mesh itself is open: around a vertex of a closed fan every edge
 // runs once each way, so the sums of the vertices after it and before it along its triangles'
 // edges agree; at a vertex on the mesh's boundary they differ by its next boundary neighbour less
-// its previous one. Exact on manifold meshes; at a non-manifold vertex the sums may cancel.
+// its previous one. Exact on consistently oriented manifold meshes, closed or open (what the
+// meshers take parts of: their own output and closed mesh leaves; winding leaves, which may be
+// neither, are polygonized whole). At a non-manifold or misoriented vertex the sums may cancel,
+// and a pinch there go unseen.
 std::vector<std::uint8_t> open_vertices(const TriangleMesh& mesh) {
   std::vector<std::int64_t> balance(mesh.positions.size(), 0);
   for (const glm::uvec3& t : mesh.triangles)
