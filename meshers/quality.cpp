@@ -37,7 +37,10 @@ constexpr double kDegenerateCos = 0.9999619230641713; // cos 0.5 degrees: no col
 constexpr double kAimCos = 0.8191520442889918;      // cos 35 degrees: faces thinner than this are worked on
 constexpr double kShortMove = 0.02;                 // of a cell: a tangential move this short is not made
 constexpr double kWorseCos = 0.9659258262890683;    // cos 15 degrees: a relaxation may not leave a face thinner
-constexpr double kOffCells = 0.02;                  // of a cell: beside a crease, a face's middle may be this far off
+// Beside a crease, how far off the surface (in cells) a relaxation may leave a vertex or a face's
+// middle, and a collapse or flip a face's middle (a looser bound: at 0.02 the slivers there stayed).
+constexpr double kOffCells = 0.02;
+constexpr double kOffStepCells = 0.05;
 constexpr double kCapFlipCos = 0.8660254037844387;  // cos 30 degrees: a cap's flip keeps its sound neighbour's plane
 
 glm::dvec3 g(const TriMesh::Point& p) { return {p[0], p[1], p[2]}; }
@@ -82,12 +85,12 @@ class Improver {
   bool locked(VH v) const { return m_.property(locked_, v); }
   // A crease point or within kNearCrease rings of one: faces here may straddle the crease.
   bool beside_crease(VH v) const { return m_.property(near_crease_, v) || on_crease(v); }
-  // A step beside a crease may not take a face's middle further off the surface than kOffCells
-  // cells or the faces it replaces were, the larger: a face across the crease cuts its corner
-  // off (measured, not guessed from normals). `faces`: the old ones, then the new ones.
+  // A collapse or flip beside a crease may not take a face's middle further off the surface than
+  // kOffStepCells cells or the faces it replaces were, the larger: a face across the crease cuts
+  // its corner off (measured, not guessed from normals). `faces`: the old ones, then the new ones.
   bool no_further_off(std::span<const std::array<glm::dvec3, 3>> faces, std::size_t old) {
     const std::vector<double>& off = off_.faces(faces);
-    double was = kOffCells * h_, is = 0;
+    double was = kOffStepCells * h_, is = 0;
     for (std::size_t i = 0; i < off.size(); ++i) (i < old ? was : is) = std::max(i < old ? was : is, off[i]);
     return is <= was;
   }

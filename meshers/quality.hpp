@@ -23,8 +23,8 @@
 // collapsed, so creases stay sharp and open patches keep their rims. Vertices beside a crease
 // (kNearCrease below) are the pass's too, but a face there may straddle the crease, so their
 // steps are measured (meshers/off_surface.hpp): a collapse or flip that leaves a face's middle
-// further off the surface than the faces it replaces were (or 0.02 cells), or a move that does,
-// is not made, and no long edge there splits. A component less than two precisions across on
+// further off the surface than the faces it replaces were (or 0.05 cells), or a move that does
+// (or 0.02), is not made, and no long edge there splits. A component less than two precisions across on
 // every axis is locked whole: so few triangles fold into each other when collapsed or relaxed,
 // and there is nothing to gain.
 //

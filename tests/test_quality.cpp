@@ -167,7 +167,9 @@ TEST(Quality, CreaseScenesAreWellShapedBesideTheirCreases) {
   // balls) and bunny00 united with a ball and minus another (the OpenVDB peer's csg). With the
   // two rings around crease points locked, the carved box's smooth triangles had a smallest
   // angle of 1.93 degrees and a first percentile of 14.8, the csg's made triangles a first
-  // percentile of 23.0 (OpenVDB's mesher: 27.6); now 7.3, 32.3 and 29.5.
+  // percentile of 23.0 (OpenVDB's mesher: 27.6); now 7.3, 32.3 and 29.5. The csg's smooth
+  // smallest angle passes issue 9's 5 degrees since a collapse or flip beside a crease may leave
+  // a face's middle 0.05 cells off the surface (0.02 before: 4.87 degrees).
   struct Scene {
     const char* name;
     Tree tree;
@@ -180,7 +182,7 @@ TEST(Quality, CreaseScenesAreWellShapedBesideTheirCreases) {
   const Scene scenes[] = {
       {"carved_box", load_scene(std::filesystem::path(HYBRIDTREE_SOURCE_DIR) / "examples/carved_box.json"), 0.01, 5.0,
        30.0, 15.0},
-      {"csg", b.build(csg), 0.01, 4.0, 30.0, 28.0}};
+      {"csg", b.build(csg), 0.01, 5.0, 30.0, 28.0}};
   for (const Scene& s : scenes) {
     const Meshed on = mesh(s.tree, s.h, true);
     const MeshChecks& c = on.checks;
