@@ -36,9 +36,9 @@ static_assert(std::endian::native == std::endian::little, "cache files are littl
 static_assert(sizeof(glm::dvec3) == 24 && sizeof(glm::uvec3) == 12, "positions and triangles are stored as arrays");
 // A new report or statistics field must be stored by the field lists below (and
 // kDiskCacheLayout bumped): these trip when one is added.
-static_assert(sizeof(PolygonizeStats) == 328, "store the new PolygonizeStats field in meshers/disk_cache.cpp");
-static_assert(sizeof(LocalStats) == 488, "store the new LocalStats field in meshers/disk_cache.cpp");
-static_assert(sizeof(NodeReport) == 928, "store the new NodeReport field in meshers/disk_cache.cpp");
+static_assert(sizeof(PolygonizeStats) == 368, "store the new PolygonizeStats field in meshers/disk_cache.cpp");
+static_assert(sizeof(LocalStats) == 528, "store the new LocalStats field in meshers/disk_cache.cpp");
+static_assert(sizeof(NodeReport) == 1008, "store the new NodeReport field in meshers/disk_cache.cpp");
 
 // The field lists: one per struct, read and written through the same list (Io is Writer or
 // Reader; S is const for the writer).
@@ -47,6 +47,7 @@ void polygonize_fields(Io& io, S& p) {
   io(p.bricks_total, p.bricks_active, p.points_evaluated, p.crease_edges, p.corner_vertices, p.crease_candidates,
      p.crease_spread, p.crease_intersections, p.quality_intersections, p.bricks_reused, p.refine_evaluations);
   io(p.unfold.pairs_before, p.unfold.pairs_after, p.unfold.collapses, p.unfold.rounds, p.unfold.seconds);
+  io(p.folds.pairs_before, p.folds.pairs_after, p.folds.collapses, p.folds.rounds, p.folds.seconds);
   io(p.snap.merged_vertices, p.snap.removed_triangles, p.snap.skipped_points, p.snap.crease_points);
   io(p.quality.collapses, p.quality.flips, p.quality.splits, p.quality.moved, p.quality.reverted, p.quality.skipped,
      p.quality.seconds, p.quality.pieces, p.quality.pieces_reused, p.quality.retries);

@@ -48,7 +48,7 @@
 namespace ht {
 
 /// The file layout's version; bump it when the layout above changes.
-inline constexpr std::uint32_t kDiskCacheLayout = 6;
+inline constexpr std::uint32_t kDiskCacheLayout = 7;
 /// The build's digest (generated at build time from the library's sources): results written by
 /// another build are stale, since any change to a mesher may change what a job makes.
 extern const std::uint64_t kDiskCacheBuild;

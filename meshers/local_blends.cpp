@@ -7,6 +7,7 @@
 #include "meshers/bridge.hpp"
 #include "meshers/relax.hpp"
 #include "meshers/remesh.hpp"
+#include "meshers/unfold.hpp"
 #include "runtime/interval.hpp"
 #include "runtime/tape.hpp"
 
@@ -248,6 +249,9 @@ TriangleMesh close_with_bands(std::vector<TriangleMesh>&& pieces, TriangleMesh&&
   // Look for intersections wherever the strategy or the remeshing changed the mesh.
   changed = merge(changed.expanded(in.precision), clip);
   st.self_intersections = untangle(out, std::vector<std::uint8_t>(out.positions.size(), 0), field, in.threshold, changed).size();
+  // A triangle folded over crosses nothing, so untangling does not see it: an edge of it collapses.
+  std::vector<std::uint8_t> no_crease;
+  unfold_folded(out, no_crease, field, in.threshold, false);
   return out;
 }
 

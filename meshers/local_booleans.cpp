@@ -4,6 +4,7 @@
 
 #include "meshers/local_parts.hpp"
 #include "meshers/relax.hpp"
+#include "meshers/unfold.hpp"
 #include "meshers/warp_mesh.hpp"
 #include "runtime/tape.hpp"
 
@@ -57,13 +58,13 @@ TriangleMesh boolean_step(const LocalInput& in, NodeKind kind, BooleanOperand& a
   a.shape.refine_near_seam(meet.expanded(in.precision), edge, shifted(b.field, 1, -T));
   b.shape.refine_near_seam(meet.expanded(in.precision), edge, shifted(a.field, 1, -T));
   TriangleMesh out;
+  std::vector<std::uint8_t> seam;
   for (int round = 0;; ++round) {
     std::vector<TriangleMesh> pieces;
     pieces.push_back(cut(a, keep_a_outside ? shifted(b.field, 1, -T) : shifted(b.field, -1, T)));
     pieces.push_back(cut(b, keep_b_outside ? shifted(a.field, 1, -T) : shifted(a.field, -1, T)));
     if (kind == NodeKind::Difference) flip(pieces[1]);
     st.kept_triangles = count_triangles(pieces);
-    std::vector<std::uint8_t> seam;
     out = join(std::move(pieces), seam_options(in, false), st, &seam);
     // The seam is the crease: it stays. Only where the operands meet can the result intersect.
     st.self_intersections = untangle(out, seam, gradient_of(node_field), T, near).size();
@@ -76,6 +77,9 @@ TriangleMesh boolean_step(const LocalInput& in, NodeKind kind, BooleanOperand& a
     refine(a, hot.expanded(in.precision), edge);
     refine(b, hot.expanded(in.precision), edge);
   }
+  // A triangle folded over beside the seam crosses nothing, so untangling does not see it; an
+  // edge of it collapses, the seam's points staying where they are.
+  unfold_folded(out, seam, gradient_of(node_field), T, false);
   return out;
 }
 

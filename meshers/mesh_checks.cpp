@@ -4,6 +4,7 @@
 
 #include "meshers/self_intersections.hpp"
 #include "meshers/surface_field.hpp"
+#include "meshers/unfold.hpp"
 #include "nodes/edge_keys.hpp"
 #include "nodes/mesh_leaf.hpp"
 #include "nodes/warps.hpp"
@@ -314,6 +315,9 @@ void surface_error(const TriangleMesh& mesh, Gradient&& gradient, double T, Mesh
     }
   }
   if (mesh.positions.empty()) return;
+  c.folded_triangles = folded_triangles(mesh, [&](std::span<const glm::dvec3> p, std::span<double> v, std::span<glm::dvec3> d) {
+                         gradient(p, v, d);
+                       }).size();
   angle_census(mesh, kept, crease_triangles(mesh, at_vertices, g), c);
 }
 

@@ -101,6 +101,7 @@ PolygonizeStats total_polygonize(const MeshResult& r) {
     s.unfold.pairs_after += p.unfold.pairs_after;
     s.unfold.collapses += p.unfold.collapses;
     s.unfold.seconds += p.unfold.seconds;
+    s.folds += p.folds;
     s.snap.merged_vertices += p.snap.merged_vertices;
     s.snap.removed_triangles += p.snap.removed_triangles;
     s.snap.skipped_points += p.snap.skipped_points;
@@ -160,6 +161,7 @@ nlohmann::json checks_json(const MeshChecks& c) {
           {"self_intersecting_pairs", c.self_intersecting_pairs},
           {"inverted_faces", c.inverted_faces},
           {"inverted_area", c.inverted_area},
+          {"folded_triangles", c.folded_triangles},
           {"angles", {{"kept_triangles", c.kept_triangles},
                       {"made_min_degrees", c.made_min_angle},
                       {"made_p1_degrees", c.made_min_angle_p1},
@@ -242,6 +244,7 @@ std::string mesh_stats_json(const Tree& tree, const MeshRun& run, const std::str
                          {"intersecting_pairs_after_sliding", stats.unfold.pairs_before},
                          {"unfold_collapses", stats.unfold.collapses},
                          {"intersecting_pairs_left", stats.crease_intersections}};
+  j["folds"] = {{"found", stats.folds.pairs_before}, {"collapses", stats.folds.collapses}, {"left", stats.folds.pairs_after}};
   j["snap"] = {{"merged_vertices", stats.snap.merged_vertices},
                {"removed_triangles", stats.snap.removed_triangles},
                {"crease_points", stats.snap.crease_points},

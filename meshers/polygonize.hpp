@@ -102,6 +102,10 @@ struct PolygonizeStats {
   std::size_t crease_intersections = 0;  ///< intersecting pairs left where the crease step ran (after unfolding)
   std::size_t quality_intersections = 0; ///< of those, pairs the quality pass made (then unfolded)
   UnfoldStats unfold;                                 ///< folds the crease step left, collapsed (meshers/unfold.hpp)
+  /// Triangles folded over onto their neighbours without crossing them, mended after the crease
+  /// step and after the quality pass (meshers/unfold.hpp unfold_folded): pairs_before counts
+  /// those found by both, pairs_after those left at the end.
+  UnfoldStats folds;
   SnapStats snap;                                     ///< vertices merged at grid points (meshers/snap.hpp)
   QualityStats quality;                               ///< the quality pass (meshers/quality.hpp)
   double seconds_classify = 0, seconds_sample = 0, seconds_extract = 0, seconds_merge = 0, seconds_features = 0;

@@ -39,14 +39,16 @@ struct RootField {
 /// extraction); where the pieces fold into each other, crease points slide along their crease
 /// and the vertices away from it relax (meshers/relax.hpp untangle), and what stays folded is
 /// collapsed (meshers/unfold.hpp). `on_crease` holds the snapped crease points and receives the
-/// step's too, one flag per vertex of the result.
+/// step's too, one flag per vertex of the result. Triangles folded over without crossing anything
+/// are collapsed too (meshers/unfold.hpp unfold_folded).
 void crease_phase(RootField& field, const FeatureOptions& features, double h, TriangleMesh& mesh,
                   const std::vector<glm::vec3>& normals, std::vector<std::uint8_t>& on_crease, PolygonizeStats& stats);
 
 /// The quality pass (meshers/quality.hpp) on the bricks' own tapes, crease points kept, the
 /// vertices inside the `locks` boxes kept where extraction put them; what it leaves intersecting
-/// is unfolded. Returns, when pairs were left and `locks` is empty, boxes around them: the caller
-/// runs the pass again from the extracted mesh with those as `locks`.
+/// is unfolded, and triangles folded over are collapsed (meshers/unfold.hpp unfold_folded).
+/// Returns, when pairs were left and `locks` is empty, boxes around them: the caller runs the
+/// pass again from the extracted mesh with those as `locks`.
 std::vector<Aabb> quality_phase(SurfaceField& field, RootField& root_field, double h, const QualityOptions& options,
                                 MemoryBudget& budget, TriangleMesh& mesh, const std::vector<std::uint8_t>& on_crease,
                                 const QualityReuse* reuse, std::span<const Aabb> locks, PolygonizeStats& stats);

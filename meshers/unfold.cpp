@@ -4,13 +4,18 @@
 #include "meshers/halfedge_ops.hpp"
 #include "meshers/relax.hpp"
 #include "meshers/submesh.hpp"
+#include "meshers/triangle_shape.hpp"
 #include "nodes/trimesh.hpp"
 
 #include <glm/geometric.hpp>
+#include <tbb/blocked_range.h>
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <array>
 #include <chrono>
+#include <cmath>
+#include <numbers>
 
 namespace ht {
 namespace {
@@ -143,10 +148,17 @@ class Collapser {
   bool widely_ = false;
 };
 
+Aabb bounds_of(const TriangleMesh& mesh) {
+  Aabb box;
+  for (const glm::dvec3& p : mesh.positions) box.grow(p);
+  return box;
+}
+
 // One round on the triangles of `pairs`: returns the collapses made; `changed` receives the
 // vertices of the region that was reworked (numbered after the round).
 std::size_t unfold_round(TriangleMesh& mesh, std::vector<std::uint8_t>& crease,
-                         const std::vector<std::array<std::uint32_t, 2>>& pairs, bool widely, std::vector<std::uint8_t>& changed) {
+                         const std::vector<std::array<std::uint32_t, 2>>& pairs, bool widely, bool widen,
+                         std::vector<std::uint8_t>& changed) {
   std::vector<std::uint8_t> region(mesh.positions.size(), 0);
   std::vector<std::array<std::uint32_t, 3>> bad;
   for (const auto& pair : pairs)
@@ -157,7 +169,7 @@ std::size_t unfold_round(TriangleMesh& mesh, std::vector<std::uint8_t>& crease,
     }
   std::sort(bad.begin(), bad.end());
   bad.erase(std::unique(bad.begin(), bad.end()), bad.end());
-  if (widely) {  // edges at the corners reach one ring further: their ends must be off the rim
+  if (widen) {  // edges at the corners reach one ring further: their ends must be off the rim
     const std::vector<std::uint8_t> any(region.size(), 1), ring = rings_around(mesh, region, any, 1);
     for (std::size_t v = 0; v < region.size(); ++v) region[v] |= ring[v];
   }
@@ -197,15 +209,14 @@ UnfoldStats unfold(TriangleMesh& mesh, std::vector<std::uint8_t>& crease, std::v
   UnfoldStats st;
   st.pairs_before = st.pairs_after = pairs.size();
   const double longest = longest_edge(mesh);
-  Aabb everywhere;
-  for (const glm::dvec3& p : mesh.positions) everywhere.grow(p);
+  const Aabb everywhere = bounds_of(mesh);
   std::vector<std::uint8_t> changed;
   bool widely = false;
   for (int round = 0; round < rounds && !pairs.empty(); ++round) {
     // A round that leaves more pairs than it found (a collapse folding elsewhere) is undone.
     const TriangleMesh before = mesh;
     const std::vector<std::uint8_t> crease_before = crease;
-    const std::size_t done = unfold_round(mesh, crease, pairs, widely, changed);
+    const std::size_t done = unfold_round(mesh, crease, pairs, widely, widely, changed);
     ++st.rounds;
     std::vector<std::array<std::uint32_t, 2>> now;
     // Every pair found lies in the reworked region, and only triangles near it changed.
@@ -220,6 +231,129 @@ UnfoldStats unfold(TriangleMesh& mesh, std::vector<std::uint8_t>& crease, std::v
     pairs = std::move(now);
     st.pairs_after = pairs.size();
   }
+  st.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+  return st;
+}
+
+std::vector<std::uint32_t> folded_triangles(const TriangleMesh& mesh, const BatchGradient& gradient) {
+  const auto& P = mesh.positions;
+  const std::size_t n = mesh.triangles.size();
+  std::vector<glm::dvec3> normal(n), at_vertex(P.size(), glm::dvec3(0.0));
+  const tbb::blocked_range<std::size_t> all(0, n, 8192);
+  tbb::parallel_for(all, [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t t = r.begin(); t != r.end(); ++t) {
+      const glm::uvec3 c = mesh.triangles[t];
+      normal[t] = face_normal(P[c[0]], P[c[1]], P[c[2]]);  // twice the area: the corners' weights
+    }
+  });
+  for (std::size_t t = 0; t < n; ++t)  // in order: the sums are the same at any thread count
+    for (int k = 0; k < 3; ++k) at_vertex[mesh.triangles[t][k]] += normal[t];
+  std::vector<std::uint8_t> against_two(n, 0);
+  tbb::parallel_for(all, [&](const tbb::blocked_range<std::size_t>& r) {
+    for (std::size_t t = r.begin(); t != r.end(); ++t) {
+      const glm::uvec3 c = mesh.triangles[t];
+      int against = 0;
+      for (int k = 0; k < 3; ++k) against += glm::dot(normal[t], at_vertex[c[k]]) < 0.0;
+      against_two[t] = against >= 2;
+    }
+  });
+  std::vector<std::uint32_t> candidates;
+  for (std::size_t t = 0; t < n; ++t)
+    if (against_two[t]) candidates.push_back(std::uint32_t(t));
+  if (candidates.empty()) return candidates;
+  // The field at each candidate's centre and corners: four points a candidate.
+  std::vector<glm::dvec3> points, grad(4 * candidates.size());
+  points.reserve(grad.size());
+  for (const std::uint32_t t : candidates) {
+    const glm::uvec3 c = mesh.triangles[t];
+    points.push_back((P[c[0]] + P[c[1]] + P[c[2]]) / 3.0);
+    for (int k = 0; k < 3; ++k) points.push_back(P[c[k]]);
+  }
+  gradient(points, {}, grad);
+  // In the gradient's terms (it points inward): against the centre's, and within
+  // kFoldAgreeDegrees of no point's.
+  const double agree = std::cos(kFoldAgreeDegrees * std::numbers::pi / 180.0);
+  std::vector<std::uint32_t> folded;
+  for (std::size_t i = 0; i < candidates.size(); ++i) {
+    const glm::dvec3 u = glm::normalize(normal[candidates[i]]);
+    const glm::dvec3* g = grad.data() + 4 * i;
+    bool folded_over = glm::dot(u, g[0]) > 0.0;
+    for (int k = 0; k < 4 && folded_over; ++k) {
+      const double l = glm::length(g[k]);
+      folded_over = !(l > 0) || -glm::dot(u, g[k]) < agree * l;
+    }
+    if (folded_over) folded.push_back(candidates[i]);
+  }
+  return folded;
+}
+
+// Where collapses are stuck: the folded triangles' corners (crease points staying) move toward
+// their neighbours' centroid and back onto {f = T}, which turns a triangle pulled over its
+// neighbour back where its corners' rings are convex. Kept when fewer triangles are folded after
+// (then `folded` receives them), nothing crosses and no triangle around the moved corners is
+// left thinner than the thinnest there before; otherwise undone.
+bool relax_folded(TriangleMesh& mesh, const std::vector<std::uint8_t>& crease, const BatchGradient& gradient, double T,
+                  std::vector<std::uint32_t>& folded, double longest, const Aabb& everywhere) {
+  std::vector<std::uint8_t> movable(mesh.positions.size(), 0);
+  for (const std::uint32_t t : folded)
+    for (int k = 0; k < 3; ++k)
+      if (const std::uint32_t v = mesh.triangles[t][k]; v >= crease.size() || !crease[v]) movable[v] = 1;
+  auto thinnest = [&] {  // meshers/triangle_shape.hpp thinness: 1 for a degenerate triangle
+    double most = 0.0;
+    for (const glm::uvec3& t : mesh.triangles)
+      if (movable[t[0]] || movable[t[1]] || movable[t[2]])
+        most = std::max(most, thinness(mesh.positions[t[0]], mesh.positions[t[1]], mesh.positions[t[2]]));
+    return most;
+  };
+  const double thinnest_before = thinnest();
+  const std::vector<glm::dvec3> before = mesh.positions;
+  relax_vertices(mesh, movable, gradient, T);
+  if (thinnest() <= thinnest_before && intersections_near(mesh, movable, longest, everywhere).empty()) {
+    std::vector<std::uint32_t> now = folded_triangles(mesh, gradient);
+    if (now.size() < folded.size()) {
+      folded = std::move(now);
+      return true;
+    }
+  }
+  mesh.positions = before;
+  return false;
+}
+
+UnfoldStats unfold_folded(TriangleMesh& mesh, std::vector<std::uint8_t>& crease, const BatchGradient& gradient, double T,
+                          bool may_widen, int rounds) {
+  const auto t0 = std::chrono::steady_clock::now();
+  UnfoldStats st;
+  std::vector<std::uint32_t> folded = folded_triangles(mesh, gradient);
+  st.pairs_before = st.pairs_after = folded.size();
+  if (folded.empty()) return st;
+  const double longest = longest_edge(mesh);
+  const Aabb everywhere = bounds_of(mesh);
+  std::vector<std::uint8_t> changed;
+  bool widely = false;
+  for (int round = 0; round < rounds && !folded.empty(); ++round) {
+    const TriangleMesh before = mesh;
+    const std::vector<std::uint8_t> crease_before = crease;
+    std::vector<std::array<std::uint32_t, 2>> bad;
+    for (const std::uint32_t t : folded) bad.push_back({t, t});
+    const std::size_t done = unfold_round(mesh, crease, bad, widely, true, changed);
+    ++st.rounds;
+    std::vector<std::uint32_t> now;
+    bool crossing = false;
+    if (done > 0) {
+      crossing = !intersections_near(mesh, changed, longest, everywhere).empty();
+      if (!crossing) now = folded_triangles(mesh, gradient);
+    }
+    if (done == 0 || crossing || now.size() >= folded.size()) {
+      if (done > 0) mesh = before, crease = crease_before;
+      if (widely || !may_widen) break;
+      widely = true;
+      continue;
+    }
+    st.collapses += done;
+    folded = std::move(now);
+    st.pairs_after = folded.size();
+  }
+  if (!folded.empty() && relax_folded(mesh, crease, gradient, T, folded, longest, everywhere)) st.pairs_after = folded.size();
   st.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
   return st;
 }
