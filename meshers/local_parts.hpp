@@ -134,8 +134,10 @@ TriangleMesh patch(const LocalInput& in, const Aabb& clip, std::function<std::ui
 /// `margin`, may be true; none when it may not be on the whole brick widened so. A patch's
 /// filter: the interval bounds it rests on loosen with the box.
 std::uint8_t octants_where(const Aabb& brick, double margin, const std::function<bool(const Aabb&)>& acts);
+/// StitchOptions::weld_fraction at creases (below 1/2: a welded point cannot pass its neighbour).
+inline constexpr double kCreaseWeldFraction = 0.45;
 /// Seams of this node: gaps up to 3/4 of the precision; `onto_earlier` where the pieces meet
-/// smoothly, not at a crease (meshers/stitch.hpp).
+/// smoothly, not at a crease (meshers/stitch.hpp); at a crease welds reach kCreaseWeldFraction.
 StitchOptions seam_options(const LocalInput& in, bool onto_earlier);
 /// Stitches the non-empty pieces, taking them (freed as they are copied in); `seam` as in stitch().
 TriangleMesh join(std::vector<TriangleMesh>&& pieces, const StitchOptions& so, LocalStats& st,

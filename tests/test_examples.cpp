@@ -50,6 +50,12 @@ TEST(Examples, EveryExampleMeshesClosedOnItsSurface) {
     EXPECT_LT(c.inverted_area, 1e-4 * c.area) << c.inverted_faces << " inverted faces";
     // None turned over onto its neighbours (the snake-woman had four beside its neck, the bowl one).
     EXPECT_EQ(c.folded_triangles, 0u);
+    // The carved box's made triangles are all at its Booleans' seams: with the seams' points
+    // welded within 0.3 of the shorter boundary edge their first percentile was 9.29 degrees,
+    // within 0.45 (meshers/local_parts.hpp kCreaseWeldFraction) 11.22.
+    if (file.filename() == "carved_box.json") {
+      EXPECT_GT(c.made_min_angle_p1, 10.5);
+    }
     EXPECT_LT(c.vertex_error_max, 0.1 * h);
   }
 }
