@@ -49,7 +49,7 @@ TriangleMesh boolean_step(const LocalInput& in, NodeKind kind, BooleanOperand& a
   const Aabb meet = intersect(a.support, b.support), near = meet.expanded(2.0 * in.precision);
   auto refine = [&](BooleanOperand& o, const Aabb& region, double edge) { o.shape.refine(region, edge); };
   auto cut = [&](BooleanOperand& o, const BatchField& f) {
-    TriangleMesh piece = cut_mesh(o.shape.mesh(), f, cut_options(in));
+    TriangleMesh piece = cut_mesh(o.shape.mesh(), f, cut_options(in, true));
     o.shape.drop();
     return piece;
   };

@@ -34,7 +34,7 @@ TriangleMesh trim_crop(const LocalInput& in, LocalStats* stats) {
     };
     if (std::none_of(out.positions.begin(), out.positions.end(), [&](const glm::dvec3& p) { return sign * (p[axis] - at) >= 0; }))
       continue;
-    out = cut_mesh(out, plane, cut_options(in));
+    out = cut_mesh(out, plane, cut_options(in, true));
     CapStats caps;
     try {
       cap_box_openings(out, box, 1e-6 * std::max(1.0, glm::length(box.size())), 1.5 * in.precision, &caps);

@@ -50,8 +50,9 @@ class NodeField {
   Aabb support_;
 };
 
-/// Cuts snap vertices by at most a tenth of the precision (see CutOptions::snap_distance).
-CutOptions cut_options(const LocalInput& in);
+/// Cuts snap vertices by at most kCutSnap of the precision, kCreaseCutSnap where the cut is a
+/// crease (see CutOptions::snap_distance).
+CutOptions cut_options(const LocalInput& in, bool crease = false);
 /// For a blend patch's cut whose rim is then pulled back (meshers/bridge.hpp pull_back_boundary):
 /// every triangle touching the cut goes, so where the new vertices sit on the crossing edges does
 /// not matter and no roots are sought; nothing snaps (a snapped vertex would only lose its fan to
@@ -134,6 +135,9 @@ TriangleMesh patch(const LocalInput& in, const Aabb& clip, std::function<std::ui
 /// `margin`, may be true; none when it may not be on the whole brick widened so. A patch's
 /// filter: the interval bounds it rests on loosen with the box.
 std::uint8_t octants_where(const Aabb& brick, double margin, const std::function<bool(const Aabb&)>& acts);
+/// How far a cut may move an operand's own vertex onto its root, in precisions
+/// (CutOptions::snap_distance): along a blend's seam, and along a crease (Booleans, crops).
+inline constexpr double kCutSnap = 0.1, kCreaseCutSnap = 0.15;
 /// StitchOptions::weld_fraction at creases (below 1/2: a welded point cannot pass its neighbour).
 inline constexpr double kCreaseWeldFraction = 0.45;
 /// Seams of this node: gaps up to 3/4 of the precision; `onto_earlier` where the pieces meet
