@@ -216,8 +216,9 @@ TriangleMesh blend_patch(const LocalInput& in, const BlendFields& bf, const std:
 
 // The operands' trimmed meshes and the patch joined by bands, evened out and untangled. Takes
 // the pieces and the patch: they are freed once joined, before the remeshing's own scratch.
+// `smooth`: the result has no crease (a trim blend's), so triangles folded over are mended.
 TriangleMesh close_with_bands(std::vector<TriangleMesh>&& pieces, TriangleMesh&& side, const Aabb& clip,
-                              const BatchGradient& field, const LocalInput& in, LocalStats& st) {
+                              const BatchGradient& field, const LocalInput& in, LocalStats& st, bool smooth) {
   std::vector<const TriangleMesh*> ops;
   for (const TriangleMesh& piece : pieces)
     if (!piece.triangles.empty()) ops.push_back(&piece);
@@ -250,8 +251,11 @@ TriangleMesh close_with_bands(std::vector<TriangleMesh>&& pieces, TriangleMesh&&
   changed = merge(changed.expanded(in.precision), clip);
   st.self_intersections = untangle(out, std::vector<std::uint8_t>(out.positions.size(), 0), field, in.threshold, changed).size();
   // A triangle folded over crosses nothing, so untangling does not see it: an edge of it collapses.
-  std::vector<std::uint8_t> no_crease;
-  unfold_folded(out, no_crease, field, in.threshold, false);
+  // Only where the result has no crease (a local blend's holds the union's, unflagged here).
+  if (smooth) {
+    std::vector<std::uint8_t> no_crease;
+    unfold_folded(out, no_crease, field, in.threshold, false);
+  }
   return out;
 }
 
@@ -293,7 +297,7 @@ TriangleMesh trim_blend(const LocalInput& in, LocalStats* stats) {
     st.patch_precision = patch_stats.patch_precision;
     st.patch = patch_stats.patch;
     st.patch_triangles = patch_stats.patch_triangles;
-    out = close_with_bands(std::move(pieces), std::move(side), clip, field, in, st);
+    out = close_with_bands(std::move(pieces), std::move(side), clip, field, in, st, true);
   }
   if (stats) *stats = st;
   return out;
@@ -351,7 +355,7 @@ TriangleMesh trim_local_blend(const LocalInput& in, LocalStats* stats) {
     st.patch_triangles = side.triangles.size();
     std::vector<TriangleMesh> joined_pieces;
     joined_pieces.push_back(std::move(joined));
-    out = close_with_bands(std::move(joined_pieces), std::move(side), acts, field, in, st);
+    out = close_with_bands(std::move(joined_pieces), std::move(side), acts, field, in, st, false);
   }
   if (stats) *stats = st;
   return out;

@@ -65,6 +65,7 @@ TriangleMesh boolean_step(const LocalInput& in, NodeKind kind, BooleanOperand& a
     pieces.push_back(cut(b, keep_b_outside ? shifted(a.field, 1, -T) : shifted(a.field, -1, T)));
     if (kind == NodeKind::Difference) flip(pieces[1]);
     st.kept_triangles = count_triangles(pieces);
+    seam.clear();  // stitch appends one flag per vertex of this round's result
     out = join(std::move(pieces), seam_options(in, false), st, &seam);
     // The seam is the crease: it stays. Only where the operands meet can the result intersect.
     st.self_intersections = untangle(out, seam, gradient_of(node_field), T, near).size();
@@ -78,7 +79,7 @@ TriangleMesh boolean_step(const LocalInput& in, NodeKind kind, BooleanOperand& a
     refine(b, hot.expanded(in.precision), edge);
   }
   // A triangle folded over beside the seam crosses nothing, so untangling does not see it; an
-  // edge of it collapses, the seam's points staying where they are.
+  // edge of it collapses (a seam point only into another), or its corners off the seam relax.
   unfold_folded(out, seam, gradient_of(node_field), T, false);
   return out;
 }

@@ -57,13 +57,15 @@ TriangleMesh RefinedMesh::release() && {
   return std::move(mesh_);
 }
 
-// Cuts snap vertices by at most a tenth of the precision (see CutOptions::snap_distance).
+// Cuts snap vertices by at most kCutSnap of the precision, kCreaseCutSnap at a crease (see
+// CutOptions::snap_distance).
 CutOptions cut_options(const LocalInput& in, bool crease) {
   CutOptions o;
   // At a crease, 0.15 of the precision, not 0.1: more of the cut's slivers go (the made
   // triangles' smallest angles: carved_box 0.47 -> 1.63 degrees, the spiky snake-woman's 0.30 ->
   // 3.16, the OpenVDB peer's csg 0.64 -> 1.99; the largest face error -11% to +32%). Not where
   // a blend's band follows the cut: the bowl's smallest smooth angle fell 6.3 -> 3.3 degrees.
+  // (Measured 2026-12-05, 1a4cd58.)
   o.snap_distance = (crease ? kCreaseCutSnap : kCutSnap) * in.precision;
   return o;
 }

@@ -42,8 +42,8 @@ struct MeshChecks {
   std::size_t inverted_faces = 0;
   double inverted_area = 0;
   /// Of those, triangles folded over onto their neighbours (meshers/unfold.hpp
-  /// folded_triangles): against the vertex normals around them and the surface at every corner,
-  /// not merely across a sharp crease. Every mesher's output should have none.
+  /// folded_triangles): against the vertex normals around them, and along the surface at none of
+  /// their corners (not merely across a sharp crease). Every mesher's output should have none.
   std::size_t folded_triangles = 0;
   // Where the small angles are, filled by measure_surface_error() too. Kept triangles are a mesh
   // leaf's own (all three corners are its vertices, bit for bit): their shapes are the input's.

@@ -109,17 +109,18 @@ std::vector<Aabb> quality_phase(SurfaceField& field, RootField& root_field, doub
   stats.quality_intersections += left.size();
   stats.crease_intersections = left.size();
   if (!left.empty()) resolve_folds(mesh, crease_after, root_field.get(), T, h, left, stats);
-  // What the crease step left folded was the pass's to work on: what is left now is all there is.
-  stats.folds.pairs_after = 0;
-  stats.folds += unfold_folded(mesh, crease_after, gradient_of(field), T);
   std::vector<Aabb> folds;
-  if (!locks.empty()) return folds;
+  if (!locks.empty()) return folds;  // a run with locks keeps their vertices as extracted: no mending
   for (const auto& pair : left) {
     Aabb box;
     for (const std::uint32_t t : pair)
       for (int k = 0; k < 3; ++k) box.grow(mesh.positions[mesh.triangles[t][k]]);
     folds.push_back(box.expanded(kFoldLockCells * h));
   }
+  // After the boxes are taken: collapses renumber the triangles `left` names. What the crease
+  // step left folded was the pass's to work on: what is left now is all there is.
+  stats.folds.pairs_after = 0;
+  stats.folds += unfold_folded(mesh, crease_after, gradient_of(field), T);
   return folds;
 }
 

@@ -294,10 +294,22 @@ std::vector<std::uint32_t> folded_triangles(const TriangleMesh& mesh, const Batc
 // left thinner than the thinnest there before; otherwise undone.
 bool relax_folded(TriangleMesh& mesh, const std::vector<std::uint8_t>& crease, const BatchGradient& gradient, double T,
                   std::vector<std::uint32_t>& folded, double longest, const Aabb& everywhere) {
+  // Beside a crease a vertex's projection may land on the other sheet and round the edge
+  // (as untangle knows): only corners a ring or more away from crease points move.
+  std::vector<std::uint8_t> beside;
+  if (std::find(crease.begin(), crease.end(), std::uint8_t(1)) != crease.end()) {
+    std::vector<std::uint8_t> seeds(crease.begin(), crease.end());
+    seeds.resize(mesh.positions.size(), 0);
+    beside = rings_around(mesh, seeds, std::vector<std::uint8_t>(mesh.positions.size(), 1), 1);
+  }
   std::vector<std::uint8_t> movable(mesh.positions.size(), 0);
   for (const std::uint32_t t : folded)
-    for (int k = 0; k < 3; ++k)
-      if (const std::uint32_t v = mesh.triangles[t][k]; v >= crease.size() || !crease[v]) movable[v] = 1;
+    for (int k = 0; k < 3; ++k) {
+      const std::uint32_t v = mesh.triangles[t][k];
+      const bool on_crease = v < crease.size() && crease[v], near_crease = v < beside.size() && beside[v];
+      if (!on_crease && !near_crease) movable[v] = 1;
+    }
+  if (std::find(movable.begin(), movable.end(), std::uint8_t(1)) == movable.end()) return false;
   auto thinnest = [&] {  // meshers/triangle_shape.hpp thinness: 1 for a degenerate triangle
     double most = 0.0;
     for (const glm::uvec3& t : mesh.triangles)
@@ -326,7 +338,7 @@ UnfoldStats unfold_folded(TriangleMesh& mesh, std::vector<std::uint8_t>& crease,
   std::vector<std::uint32_t> folded = folded_triangles(mesh, gradient);
   st.pairs_before = st.pairs_after = folded.size();
   if (folded.empty()) return st;
-  const double longest = longest_edge(mesh);
+  double longest = longest_edge(mesh);  // grows as collapses join edges: measured again after each
   const Aabb everywhere = bounds_of(mesh);
   std::vector<std::uint8_t> changed;
   bool widely = false;
@@ -352,6 +364,7 @@ UnfoldStats unfold_folded(TriangleMesh& mesh, std::vector<std::uint8_t>& crease,
     st.collapses += done;
     folded = std::move(now);
     st.pairs_after = folded.size();
+    longest = longest_edge(mesh);
   }
   if (!folded.empty() && relax_folded(mesh, crease, gradient, T, folded, longest, everywhere)) st.pairs_after = folded.size();
   st.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();

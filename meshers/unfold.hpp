@@ -43,23 +43,26 @@ struct UnfoldStats {
 UnfoldStats unfold(TriangleMesh& mesh, std::vector<std::uint8_t>& crease,
                    std::vector<std::array<std::uint32_t, 2>>& pairs, int rounds = 4);
 
+/// A folded triangle is within this many degrees of the outward normal at none of its corners.
+inline constexpr double kFoldAgreeDegrees = 60.0;
 /// Triangles folded over onto their neighbours: the normal points against the (area-weighted)
 /// vertex normals at two or more of its corners and against the surface's outward normal at its
 /// centre (`gradient`: the field grows inward), and it is within kFoldAgreeDegrees of the
 /// outward normal at none of its corners. A sound triangle across a sharp crease lies along one
 /// of the sheets it spans. Increasing order. Cost: one pass over the triangles, four gradients
 /// a candidate.
-inline constexpr double kFoldAgreeDegrees = 60.0;
 std::vector<std::uint32_t> folded_triangles(const TriangleMesh& mesh, const BatchGradient& gradient);
 
 /// Collapses an edge of each folded triangle (as unfold() does for intersecting ones, the same
-/// rules), for at most `rounds` rounds; a round that leaves as many folded triangles as it found
-/// or makes triangles intersect is undone, and then, when `may_widen`, the next may reach further
-/// (any edge at the corners, crease points too: unfold()'s second rules). Where folds are still
-/// left, their corners (crease points staying) relax toward their neighbours' centroid and back
-/// onto {f = T} (meshers/relax.hpp relax_vertices), kept when that leaves fewer and crosses
-/// nothing. Returns the collapses made, and in pairs_before / pairs_after the folded triangles
-/// found and left. `crease` as for unfold(). The mesh stays closed, oriented and manifold.
+/// rules: a crease point collapses only into another), for at most `rounds` rounds; a round that
+/// leaves as many folded triangles as it found or makes triangles intersect is undone, and then,
+/// when `may_widen`, the next may reach further (any edge at the corners, crease points too:
+/// unfold()'s second rules). Where folds are still left, their corners a ring or more from crease
+/// points relax toward their neighbours' centroid and back onto {f = T} (meshers/relax.hpp
+/// relax_vertices), kept when that leaves fewer and crosses nothing and no triangle around them
+/// is thinner than the thinnest was. Returns the collapses made, and in pairs_before /
+/// pairs_after the folded triangles found and left (a relaxation kept shows only there).
+/// `crease` as for unfold(). A closed, oriented manifold stays one.
 UnfoldStats unfold_folded(TriangleMesh& mesh, std::vector<std::uint8_t>& crease, const BatchGradient& gradient, double T,
                           bool may_widen = true, int rounds = 4);
 
