@@ -18,6 +18,11 @@
 // pair; check_mesh() counts them. Its count uses a tolerance, so near-degenerate slivers it
 // counts are still tested here, exactly.
 //
+// Pairs that share a vertex whose fan is certified embedded (meshers/embedded_fans.hpp: a
+// projection of the fan that tiles a star around it, with a margin far above rounding) meet only
+// where their connectivity says: they take no test. On a well-shaped closed mesh that is 99% of
+// the candidates.
+//
 // Exactness: orientation tests are evaluated in double with a static error bound and, when the
 // bound cannot decide the sign, recomputed exactly with floating-point expansion arithmetic
 // (over the coordinate differences when those are exact, as for nearby vertices, else over the
@@ -48,7 +53,7 @@ struct SelfIntersections {
 /// Finds the pairs of triangles of `mesh` whose closed point sets intersect beyond what their
 /// shared vertices or edge imply (see the rules at the top of this file).
 ///
-/// Indices must be valid and positions finite. Complexity: O(n) for the grid (O(n log n) for the
+/// Indices must be valid and positions finite. Complexity: O(n + v) for the fans and the grid (O(n log n) for the
 /// box hierarchy where the grid declines) plus O(k) exact tests for the k pairs of triangles
 /// whose bounding boxes overlap (for a reasonable surface mesh k is a small multiple of n). Uses
 /// the TBB thread pool (the grid's or Embree's pair search and a parallel loop over the

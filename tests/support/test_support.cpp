@@ -2,7 +2,13 @@
 
 #include <gtest/gtest.h>
 
+#include <glm/geometric.hpp>
+
 #include <array>
+#include <cmath>
+#include <map>
+#include <utility>
+#include <vector>
 #include <atomic>
 #include <cstdio>
 #include <cstring>
@@ -120,6 +126,34 @@ void run_on_stack(std::size_t bytes, const std::function<void()>& fn) {
   if (rc != 0) throw std::system_error(rc, std::generic_category(), "pthread_create");
   pthread_join(thread, nullptr);
   if (job.error) std::rethrow_exception(job.error);
+}
+
+TriangleMesh icosphere(int levels, double radius, glm::dvec3 centre) {
+  const double g = (1 + std::sqrt(5.0)) / 2;
+  TriangleMesh m;
+  m.positions = {{-1, g, 0}, {1, g, 0}, {-1, -g, 0}, {1, -g, 0}, {0, -1, g}, {0, 1, g},
+                 {0, -1, -g}, {0, 1, -g}, {g, 0, -1}, {g, 0, 1}, {-g, 0, -1}, {-g, 0, 1}};
+  m.triangles = {{0, 11, 5}, {0, 5, 1},  {0, 1, 7},   {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
+                 {11, 10, 2}, {10, 7, 6}, {7, 1, 8},   {3, 9, 4},  {3, 4, 2},   {3, 2, 6}, {3, 6, 8},
+                 {3, 8, 9},  {4, 9, 5},  {2, 4, 11},  {6, 2, 10}, {8, 6, 7},   {9, 8, 1}};
+  for (auto& p : m.positions) p = glm::normalize(p);
+  for (int l = 0; l < levels; ++l) {
+    std::map<std::pair<unsigned, unsigned>, unsigned> mid;
+    auto midpoint = [&](unsigned a, unsigned b) {
+      const auto key = std::minmax(a, b);
+      auto [it, fresh] = mid.try_emplace(key, static_cast<unsigned>(m.positions.size()));
+      if (fresh) m.positions.push_back(glm::normalize(m.positions[a] + m.positions[b]));
+      return it->second;
+    };
+    std::vector<glm::uvec3> next;
+    for (const auto& t : m.triangles) {
+      const unsigned a = midpoint(t[0], t[1]), b = midpoint(t[1], t[2]), c = midpoint(t[2], t[0]);
+      next.insert(next.end(), {{t[0], a, c}, {t[1], b, a}, {t[2], c, b}, {a, b, c}});
+    }
+    m.triangles = std::move(next);
+  }
+  for (auto& p : m.positions) p = centre + radius * p;
+  return m;
 }
 
 }  // namespace ht::test

@@ -53,6 +53,10 @@ inline constexpr bool kSanitized =
 /// throws. For deep recursions whose frames the sanitizers inflate past the main thread's stack.
 void run_on_stack(std::size_t bytes, const std::function<void()>& fn);
 
+/// An icosahedron subdivided `levels` times (each triangle into four) onto the sphere of `radius`
+/// around `centre`: 20 * 4^levels triangles, counter-clockwise from outside, closed.
+TriangleMesh icosphere(int levels, double radius = 1.0, glm::dvec3 centre = glm::dvec3(0.0));
+
 /// Mesh plan options at precision h with strategy s (meshers/mesh_plan.hpp).
 MeshOptions mesh_options(double h, MeshStrategy s = MeshStrategy::Auto);
 
