@@ -23,7 +23,7 @@ std::uint64_t mix_box(std::uint64_t h, const Aabb& b) {
 // A new option field must be hashed above (or said not to change output): these trip when one
 // is added.
 static_assert(sizeof(FeatureOptions) == 40, "hash the new FeatureOptions field");
-static_assert(sizeof(QualityOptions) == 12, "hash the new QualityOptions field");
+static_assert(sizeof(QualityOptions) == 24, "hash the new QualityOptions field");
 
 std::uint64_t mesh_options_hash(const MeshOptions& o) {
   std::uint64_t h = hash_mix(0x4d6573684f707473ull, 1);  // "MeshOpts", layout version 1
@@ -43,6 +43,7 @@ std::uint64_t mesh_options_hash(const MeshOptions& o) {
   h = hash_mix(h, p.quality.enabled);
   h = hash_mix(h, static_cast<std::uint64_t>(p.quality.iterations));
   h = hash_mix(h, static_cast<std::uint64_t>(p.quality.newton_steps));
+  h = mix_double(h, p.quality.off_step_cells);
   return mix_box(h, p.clip);
 }
 

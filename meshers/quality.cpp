@@ -23,7 +23,7 @@ void Improver::run(QualityStats& st) {
 
 bool Improver::no_further_off(std::span<const std::array<glm::dvec3, 3>> faces, std::size_t old) {
   const std::vector<double>& off = off_.faces(faces);
-  double was = kOffStepCells * h_, is = 0;
+  double was = o_.off_step_cells * h_, is = 0;
   for (std::size_t i = 0; i < off.size(); ++i) (i < old ? was : is) = std::max(i < old ? was : is, off[i]);
   return is <= was;
 }

@@ -59,6 +59,10 @@ struct QualityOptions {
   bool enabled = true;  ///< false: meshers return what they extracted
   int iterations = 3;   ///< rounds of collapse, flip and relax
   int newton_steps = 1; ///< projection steps per relaxation
+  /// Beside a crease a collapse or flip may take a face's middle this many precisions off the
+  /// surface, or as far as the faces it replaces were (at 0.02 the polygonizer's slivers there
+  /// stayed; a trimmed Boolean's seam, whose operands' faces are exact, takes 0.02).
+  double off_step_cells = 0.05;
 };
 
 /// Slabs are this many precisions thick.

@@ -41,9 +41,8 @@ inline constexpr double kAimCos = 0.8191520442889918;      // cos 35 degrees: fa
 inline constexpr double kShortMove = 0.02;                 // of a cell: a tangential move this short is not made
 inline constexpr double kWorseCos = 0.9659258262890683;    // cos 15 degrees: a relaxation may not leave a face thinner
 // Beside a crease, how far off the surface (in cells) a relaxation may leave a vertex or a face's
-// middle, and a collapse or flip a face's middle (a looser bound: at 0.02 the slivers there stayed).
+// middle (a collapse's or flip's bound is QualityOptions::off_step_cells).
 inline constexpr double kOffCells = 0.02;
-inline constexpr double kOffStepCells = 0.05;
 inline constexpr double kCapFlipCos = 0.8660254037844387;  // cos 30 degrees: a cap's flip keeps its sound neighbour's plane
 // Crease chains (meshers/quality_creases.cpp): a crease point whose two crease neighbours make
 // an angle over 120 degrees at it is on a chain; one nearer a neighbour than kChainMergeCells
@@ -52,7 +51,7 @@ inline constexpr double kCapFlipCos = 0.8660254037844387;  // cos 30 degrees: a 
 inline constexpr double kChainTurnCos = -0.5;
 inline constexpr double kChainMergeCells = 0.35;
 inline constexpr double kChainEven = 0.2;
-inline constexpr double kChainOffCells = 0.01;
+inline constexpr double kChainOffCells = 0.005;
 
 inline glm::dvec3 g(const TriMesh::Point& p) { return {p[0], p[1], p[2]}; }
 inline TriMesh::Point om(const glm::dvec3& p) { return {p.x, p.y, p.z}; }
@@ -87,7 +86,7 @@ class Improver {
   // A crease point or within kNearCrease rings of one: faces here may straddle the crease.
   bool beside_crease(VH v) const { return m_.property(near_crease_, v) || on_crease(v); }
   // A collapse or flip beside a crease may not take a face's middle further off the surface than
-  // kOffStepCells cells or the faces it replaces were, the larger: a face across the crease cuts
+  // off_step_cells cells or the faces it replaces were, the larger: a face across the crease cuts
   // its corner off (measured, not guessed from normals). `faces`: the old ones, then the new ones.
   bool no_further_off(std::span<const std::array<glm::dvec3, 3>> faces, std::size_t old);
   // Beside a crease: a crease point or kNearCrease vertex among `v` and its neighbours.

@@ -48,6 +48,7 @@ std::uint64_t piece_key(const TriangleMesh& in, std::span<const std::uint8_t> ke
   std::uint64_t k = hash_mix(0x5175616c50696563ull, kPieceVersion);  // "QualPiec"
   k = mix_double(mix_double(k, T), h);
   k = hash_mix(hash_mix(hash_mix(k, o.enabled), std::uint64_t(o.iterations)), std::uint64_t(o.newton_steps));
+  k = mix_double(k, o.off_step_cells);
   k = hash_bytes(k, in.positions.data(), in.positions.size() * sizeof(glm::dvec3));
   k = hash_bytes(k, in.triangles.data(), in.triangles.size() * sizeof(glm::uvec3));
   k = hash_bytes(k, keep.data(), keep.size());

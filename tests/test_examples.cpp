@@ -54,10 +54,12 @@ TEST(Examples, EveryExampleMeshesClosedOnItsSurface) {
     // welded within 0.3 of the shorter boundary edge and the cuts snapping an operand's vertex
     // by at most 0.1 of the precision their first percentile was 9.29 degrees; with the weld at
     // 0.45 (meshers/local_parts.hpp kCreaseWeldFraction) 11.22, with the snap at 0.15 at creases
-    // (kCreaseCutSnap) 14.28 and the smallest 1.63 (0.47 before both).
+    // (kCreaseCutSnap) 14.28 and the smallest 1.63 (0.47 before both); with the band around
+    // each seam through the quality pass, the seam's points evened along it
+    // (meshers/local_booleans.cpp polish_seam), 24.43 and 6.79.
     if (file.filename() == "carved_box.json") {
-      EXPECT_GT(c.made_min_angle_p1, 13.5);
-      EXPECT_GT(c.made_min_angle, 1.0);
+      EXPECT_GT(c.made_min_angle_p1, 22.0);
+      EXPECT_GT(c.made_min_angle, 5.0);
     }
     EXPECT_LT(c.vertex_error_max, 0.1 * h);
   }
