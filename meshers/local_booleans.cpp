@@ -3,10 +3,7 @@
 #include "meshers/local_ops.hpp"
 
 #include "meshers/local_parts.hpp"
-#include "meshers/quality.hpp"
-#include "meshers/quality_whole.hpp"
 #include "meshers/relax.hpp"
-#include "meshers/submesh.hpp"
 #include "meshers/unfold.hpp"
 #include "meshers/warp_mesh.hpp"
 #include "runtime/tape.hpp"
@@ -37,51 +34,6 @@ BatchField shifted(const BatchField& f, double a, double b) {
     f(points, values);
     for (double& v : values) v = a * v + b;
   };
-}
-
-// The triangles around a seam go through the quality pass (meshers/quality.hpp), the seam's
-// points as its crease points (their chains evened along the seam), the two rings around them
-// as the rings beside a crease (every step measured against the node's surface, a collapse's or
-// flip's faces within kSeamOffStepCells precisions of it), everything else locked: the operands'
-// own triangles away from the seam stay bit for bit. The stitch leaves seam points where the
-// two operands' edges cross the seam, however close together (examples/carved_box.json's made
-// triangles' first percentile 14.3 degrees before this, 24.4 after).
-constexpr double kSeamOffStepCells = 0.01;
-constexpr int kSeamRings = 2;
-
-void polish_seam(TriangleMesh& out, std::vector<std::uint8_t>& seam, const TapeEvaluator& node_field, double T, double h) {
-  seam.resize(out.positions.size(), 0);
-  const std::vector<std::uint8_t> any(out.positions.size(), 1);
-  const std::vector<std::uint8_t> band = rings_around(out, seam, any, kSeamRings);  // the seam not included
-  // Only the triangles at the seam and its band are taken out (one ring more, locked, so that
-  // the band's rings are whole): the rest of the mesh is not touched at all.
-  std::vector<std::uint8_t> region = rings_around(out, seam, any, kSeamRings + 1);
-  for (std::size_t v = 0; v < region.size(); ++v) region[v] |= seam[v];
-  Pieces pieces = take_region(out, region);
-  if (pieces.parts.empty()) return;
-  Submesh& part = pieces.parts[0];
-  const std::size_t n = part.mesh.positions.size();
-  std::vector<std::uint8_t> locked(n, 1), crease(n, 0);
-  for (std::size_t v = 0; v < n; ++v) {
-    const std::uint32_t w = part.origin[v];
-    crease[v] = seam[w];
-    if (!part.rim[v] && !seam[w] && band[w]) locked[v] = kNearCrease;
-  }
-  const BatchField field = [&node_field](std::span<const glm::dvec3> p, std::span<double> v) { node_field.field(p, v); };
-  QualityOptions options;
-  options.off_step_cells = kSeamOffStepCells;
-  QualityStats st;
-  std::vector<std::uint32_t> origin;
-  improve_whole(part.mesh, locked, crease, field, T, h, options, st, origin);
-  for (std::uint32_t& o : origin)
-    if (o != ~0u) o = part.origin[o];
-  std::vector<std::uint32_t> renumber;
-  const std::size_t before = out.positions.size();
-  put_back(out, pieces, std::span(&part.mesh, 1), std::span(&origin, 1), &renumber);
-  std::vector<std::uint8_t> now(out.positions.size(), 0);
-  for (std::size_t v = 0; v < before; ++v)
-    if (renumber[v] != ~0u) now[renumber[v]] = seam[v];
-  seam = std::move(now);
 }
 
 // a op b, both trimmed along the other's surface and stitched. The cuts sample the other

@@ -1,7 +1,10 @@
 #include "meshers/local_parts.hpp"
 
 #include "meshers/polygonize.hpp"
+#include "meshers/quality.hpp"
+#include "meshers/quality_whole.hpp"
 #include "meshers/relax.hpp"
+#include "meshers/submesh.hpp"
 #include "meshers/warp_mesh.hpp"
 #include "runtime/tape.hpp"
 
@@ -235,6 +238,41 @@ std::size_t count_triangles(const std::vector<TriangleMesh>& pieces) {
   std::size_t n = 0;
   for (const TriangleMesh& p : pieces) n += p.triangles.size();
   return n;
+}
+
+void polish_seam(TriangleMesh& out, std::vector<std::uint8_t>& seam, const TapeEvaluator& node_field, double T, double h) {
+  seam.resize(out.positions.size(), 0);
+  const std::vector<std::uint8_t> any(out.positions.size(), 1);
+  const std::vector<std::uint8_t> band = rings_around(out, seam, any, kPolishRings);  // the seam not included
+  // Only the triangles at the seam and its band are taken out (one ring more, locked, so that
+  // the band's rings are whole): the rest of the mesh is not touched at all.
+  std::vector<std::uint8_t> region = rings_around(out, seam, any, kPolishRings + 1);
+  for (std::size_t v = 0; v < region.size(); ++v) region[v] |= seam[v];
+  Pieces pieces = take_region(out, region);
+  if (pieces.parts.empty()) return;
+  Submesh& part = pieces.parts[0];
+  const std::size_t n = part.mesh.positions.size();
+  std::vector<std::uint8_t> locked(n, 1), crease(n, 0);
+  for (std::size_t v = 0; v < n; ++v) {
+    const std::uint32_t w = part.origin[v];
+    crease[v] = seam[w];
+    if (!part.rim[v] && !seam[w] && band[w]) locked[v] = kNearCrease;
+  }
+  const BatchField field = [&node_field](std::span<const glm::dvec3> p, std::span<double> v) { node_field.field(p, v); };
+  QualityOptions options;
+  options.off_step_cells = kSeamOffStepCells;
+  QualityStats st;
+  std::vector<std::uint32_t> origin;
+  improve_whole(part.mesh, locked, crease, field, T, h, options, st, origin);
+  for (std::uint32_t& o : origin)
+    if (o != ~0u) o = part.origin[o];
+  std::vector<std::uint32_t> renumber;
+  const std::size_t before = out.positions.size();
+  put_back(out, pieces, std::span(&part.mesh, 1), std::span(&origin, 1), &renumber);
+  std::vector<std::uint8_t> now(out.positions.size(), 0);
+  for (std::size_t v = 0; v < before; ++v)
+    if (renumber[v] != ~0u) now[renumber[v]] = seam[v];
+  seam = std::move(now);
 }
 
 }  // namespace ht::local
