@@ -9,6 +9,7 @@
 #include "runtime/tape.hpp"
 
 #include <glm/geometric.hpp>
+#include <tbb/parallel_for.h>
 
 #include <algorithm>
 #include <string>
@@ -248,27 +249,33 @@ void polish_seam(TriangleMesh& out, std::vector<std::uint8_t>& seam, const TapeE
   // the band's rings are whole): the rest of the mesh is not touched at all.
   std::vector<std::uint8_t> region = rings_around(out, seam, any, kPolishRings + 1);
   for (std::size_t v = 0; v < region.size(); ++v) region[v] |= seam[v];
-  Pieces pieces = take_region(out, region);
+  // Each seam's band is a part of its own (a Boolean's two seams, say), improved in parallel.
+  Pieces pieces = take_region(out, region, true);
   if (pieces.parts.empty()) return;
-  Submesh& part = pieces.parts[0];
-  const std::size_t n = part.mesh.positions.size();
-  std::vector<std::uint8_t> locked(n, 1), crease(n, 0);
-  for (std::size_t v = 0; v < n; ++v) {
-    const std::uint32_t w = part.origin[v];
-    crease[v] = seam[w];
-    if (!part.rim[v] && !seam[w] && band[w]) locked[v] = kNearCrease;
-  }
   const BatchField field = [&node_field](std::span<const glm::dvec3> p, std::span<double> v) { node_field.field(p, v); };
   QualityOptions options;
   options.off_step_cells = kSeamOffStepCells;
-  QualityStats st;
-  std::vector<std::uint32_t> origin;
-  improve_whole(part.mesh, locked, crease, field, T, h, options, st, origin);
-  for (std::uint32_t& o : origin)
-    if (o != ~0u) o = part.origin[o];
+  const std::size_t count = pieces.parts.size();
+  std::vector<TriangleMesh> changed(count);
+  std::vector<std::vector<std::uint32_t>> origin(count);
+  tbb::parallel_for(std::size_t(0), count, [&](std::size_t i) {
+    Submesh& part = pieces.parts[i];
+    const std::size_t n = part.mesh.positions.size();
+    std::vector<std::uint8_t> locked(n, 1), crease(n, 0);
+    for (std::size_t v = 0; v < n; ++v) {
+      const std::uint32_t w = part.origin[v];
+      crease[v] = seam[w];
+      if (!part.rim[v] && !seam[w] && band[w]) locked[v] = kNearCrease;
+    }
+    QualityStats st;
+    changed[i] = std::move(part.mesh);
+    improve_whole(changed[i], locked, crease, field, T, h, options, st, origin[i]);
+    for (std::uint32_t& o : origin[i])
+      if (o != ~0u) o = part.origin[o];
+  });
   std::vector<std::uint32_t> renumber;
   const std::size_t before = out.positions.size();
-  put_back(out, pieces, std::span(&part.mesh, 1), std::span(&origin, 1), &renumber);
+  put_back(out, pieces, changed, origin, &renumber);
   std::vector<std::uint8_t> now(out.positions.size(), 0);
   for (std::size_t v = 0; v < before; ++v)
     if (renumber[v] != ~0u) now[renumber[v]] = seam[v];
