@@ -18,6 +18,8 @@ using glm::dvec3;
 // A triangle counts as turning counter-clockwise in projection when its turn exceeds this times
 // the product of its projected sides: far above the rounding of the projection (header).
 constexpr double kMargin = 1e-8;
+// Fans with more triangles are not certified (their pairs are tested).
+constexpr std::size_t kMaxValence = 64;
 
 struct Corner {
   std::uint32_t a, b;  // the link edge a -> b of the triangle (v, a, b), in the mesh's order
@@ -29,6 +31,7 @@ double cross2(const dvec2& a, const dvec2& b) { return a.x * b.y - a.y * b.x; }
 // counter-clockwise by the margin, winding once around the vertex. `fan` is reordered along the
 // cycle.
 bool certify(const TriangleMesh& mesh, std::uint32_t v, Corner* fan, std::size_t k) {
+  if (k > kMaxValence) return false;  // the walk below is quadratic in the valence
   // Walk the link: the triangle after (a, b) is the one starting at b; a link vertex that starts
   // two triangles (a pinch), an open end or a second cycle fails.
   for (std::size_t i = 0; i + 1 < k; ++i) {
@@ -52,18 +55,25 @@ bool certify(const TriangleMesh& mesh, std::uint32_t v, Corner* fan, std::size_t
   const dvec3 helper = std::abs(n.x) < 0.6 ? dvec3(1, 0, 0) : dvec3(0, 1, 0);
   const dvec3 e1 = glm::normalize(glm::cross(n, helper)), e2 = glm::cross(n, e1);
   // Each link vertex projected once, so both triangles on it read the same corner.
+  // The rounding of a projected corner grows with the corner's distance in space, not with its
+  // projection (the dot products cancel when the corner lies almost along n): the margin is
+  // taken against the sides in space, |d|, which bound the projections' errors.
+  struct Projected {
+    dvec2 at;
+    double reach;  // |d|
+  };
   auto project = [&](std::uint32_t w) {
     const dvec3 d = mesh.positions[w] - pv;
-    return dvec2(glm::dot(e1, d), glm::dot(e2, d));
+    return Projected{dvec2(glm::dot(e1, d), glm::dot(e2, d)), glm::length(d)};
   };
   int winding = 0;
-  dvec2 A = project(fan[0].a);
-  const dvec2 first = A;
+  Projected A = project(fan[0].a);
+  const Projected first = A;
   for (std::size_t i = 0; i < k; ++i) {
-    const dvec2 B = i + 1 < k ? project(fan[i].b) : first;
-    if (!(cross2(A, B) > kMargin * glm::length(A) * glm::length(B))) return false;
+    const Projected B = i + 1 < k ? project(fan[i].b) : first;
+    if (!(cross2(A.at, B.at) > kMargin * A.reach * B.reach)) return false;
     // A turn of less than a half-turn from below the +x ray to on or above it crosses that ray.
-    if (A.y < 0 && B.y >= 0) ++winding;
+    if (A.at.y < 0 && B.at.y >= 0) ++winding;
     A = B;
   }
   return winding == 1;

@@ -12,9 +12,11 @@
 // whose preimages in both are that edge or v. Hence the fan is embedded in space.
 //
 // Rounding. Each projected corner is computed once per fan and used by both triangles it
-// belongs to; a triangle counts only when its projected turn exceeds kMargin times the product
-// of its two projected sides (a sine of 1e-8, where the rounding of the differences and dot
-// products is below 1e-15 relative). The exact projection's turns then have the same signs and
+// belongs to; a triangle counts only when its projected turn exceeds kMargin (1e-8) times the
+// product of its two sides in space, which bound the rounding of the differences and dot products
+// (below 1e-15 of them). Against the projected sides it would not be sound: a corner almost along
+// the projection's direction has a tiny projection whose direction rounding can turn (a review
+// built such a fan whose exact fold passed). The exact projection's turns then have the same signs and
 // the winding number, a sum of angles each strictly between 0 and pi, cannot change between the
 // computed and the exact corners. So a certified fan is embedded in exact arithmetic: skipping
 // its pairs loses no intersection the exact tests would find. A fan that fails is simply not
@@ -30,8 +32,9 @@ namespace ht {
 
 /// One byte per vertex of `mesh`: 1 when the fan of triangles using that vertex (by index) is
 /// certified embedded (above), else 0 (no triangles, a boundary or a pinch, a fold, a corner
-/// repeated in a triangle, a turn too small to decide). Positions must be finite. O(n) time and
-/// memory; uses the TBB thread pool; deterministic; reads `mesh` only (thread-safe).
+/// repeated in a triangle, a turn too small to decide, more than 64 triangles). Positions must be
+/// finite. O(n) time and memory; uses the TBB thread pool; deterministic; reads `mesh` only
+/// (thread-safe).
 std::vector<std::uint8_t> embedded_fans(const TriangleMesh& mesh);
 
 }  // namespace ht

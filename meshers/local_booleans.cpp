@@ -81,7 +81,15 @@ TriangleMesh boolean_step(const LocalInput& in, NodeKind kind, BooleanOperand& a
   // A triangle folded over beside the seam crosses nothing, so untangling does not see it; an
   // edge of it collapses (a seam point only into another), or its corners off the seam relax.
   unfold_folded(out, seam, gradient_of(node_field), T, false);
-  polish_seam(out, seam, node_field, T, in.precision);
+  // The seam's band through the quality pass, unless the seams are to be left as stitched
+  // (LocalInput::remesh_seams) or the pass is off; where polishing made two triangles cross (its
+  // steps are local), the stitched band stays.
+  if (in.remesh_seams && in.polygonize.quality.enabled && st.self_intersections == 0) {
+    TriangleMesh stitched = out;
+    std::vector<std::uint8_t> stitched_seam = seam;
+    polish_seam(out, seam, node_field, T, in.precision);
+    if (!intersections_in(out, near).empty()) out = std::move(stitched), seam = std::move(stitched_seam);
+  }
   return out;
 }
 

@@ -96,7 +96,7 @@ std::vector<Aabb> quality_phase(SurfaceField& field, RootField& root_field, doub
     keep.resize(mesh.positions.size(), 0);
     for (std::size_t v = 0; v < keep.size(); ++v)
       for (const Aabb& box : locks)
-        if (box.contains(mesh.positions[v])) keep[v] = 1;
+        if (box.contains(mesh.positions[v])) keep[v] = kPinned;
   }
   std::vector<std::uint8_t> crease_after;
   QualityStats st;

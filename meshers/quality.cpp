@@ -142,8 +142,8 @@ std::size_t Improver::collapse() {
     for (const HH h : {shortest, m_.opposite_halfedge_handle(shortest)}) {
       const VH from = m_.from_vertex_handle(h);
       // An edge this short moves nothing that matters: a kNearCrease vertex may go even beside
-      // a crease point (near_locked). Any collapse beside a crease is measured after the
-      // shapes (surface_kept).
+      // a vertex that holds its neighbours (near_rim). Any collapse beside a crease is measured
+      // after the shapes (surface_kept).
       const bool may_go = (!locked(from) && !near_rim(from)) || (short_edge && m_.property(near_crease_, from));
       if (!may_go) continue;
       // The shapes first: on the snake they turn down 60% of the candidates, the link check

@@ -112,6 +112,10 @@ struct QualityStats {
 /// precisions may collapse it even into a crease point's neighbour. Any other nonzero value
 /// locks the vertex outright.
 inline constexpr std::uint8_t kNearCrease = 2;
+/// A `locked` value: the vertex stays even where it is a crease point (no merging, no sliding
+/// along its chain) and its neighbours stay as a rim's do. The polygonizer's second run around
+/// folds keeps the vertices in their boxes so.
+inline constexpr std::uint8_t kPinned = 3;
 inline constexpr double kShortNeedleEdge = 0.15;
 
 /// Improves the triangles of `mesh` in place. `locked` and `crease` hold one flag per vertex (or

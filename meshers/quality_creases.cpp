@@ -13,7 +13,7 @@ std::size_t Improver::merge_crease_points() {
     if (m_.status(e).deleted() || m_.calc_edge_length(e) >= kMergeFraction * h_) continue;
     const HH h = m_.halfedge_handle(e, 0);
     const VH a = m_.from_vertex_handle(h), b = m_.to_vertex_handle(h);
-    if (!on_crease(a) || !on_crease(b)) continue;
+    if (!on_crease(a) || !on_crease(b) || pinned(a) || pinned(b)) continue;
     for (const HH x : {h, m_.opposite_halfedge_handle(h)}) {
       if (m_.is_boundary(m_.from_vertex_handle(x)) || !ht::collapse_ok(m_, x) || !keeps_faces(x)) continue;
       ht::collapse(m_, x);
@@ -32,13 +32,13 @@ bool Improver::chain_neighbours(VH v, VH& a, VH& b) const {
       if (++n > 2) return false;
       (n == 1 ? a : b) = w;
     }
-  if (n != 2) return false;
+  if (n != 2 || pinned(v) || pinned(a) || pinned(b)) return false;
   const glm::dvec3 u = p(a) - p(v), w = p(b) - p(v);
   return glm::dot(u, w) < kChainTurnCos * glm::length(u) * glm::length(w);
 }
 
 bool Improver::try_move(VH v, const glm::dvec3& to) {
-  const glm::dvec3 from = p(v);
+  const glm::dvec3 from = p(v), ref = ring_normal(v);
   double before = -1.0, after = -1.0;
   std::vector<std::array<glm::dvec3, 3>>& faces = faces_;
   faces.clear();
@@ -49,6 +49,9 @@ bool Improver::try_move(VH v, const glm::dvec3& to) {
       if (c[k] == v) r[k] = to;
     const double was = thinness(q[0], q[1], q[2]), is = thinness(r[0], r[1], r[2]);
     if (is > kDegenerateCos) return false;
+    // No face turns over: a cap's apex pushed across its long edge would be less thin, and no
+    // further off the surface.
+    if (glm::dot(unit_normal(r[0], r[1], r[2]), ref) <= 0.0) return false;
     if (was < kNeedleCos && glm::dot(unit_normal(q[0], q[1], q[2]), unit_normal(r[0], r[1], r[2])) < kKeepPlaneCos) return false;
     before = std::max(before, was), after = std::max(after, is);
     faces.push_back(q);
@@ -64,8 +67,7 @@ bool Improver::try_move(VH v, const glm::dvec3& to) {
   if (!no_further_off(faces, old)) return false;
   // The point itself stays as near the surface as it was, or within kChainOffCells: a chord of
   // a curved crease leaves it.
-  const glm::dvec3 n = ring_normal(v);
-  const glm::dvec3 at[2] = {from, to}, dir[2] = {n, n};
+  const glm::dvec3 at[2] = {from, to}, dir[2] = {ref, ref};
   const std::vector<double>& off = off_.points(at, dir);
   if (!(off[1] <= std::max(off[0], kChainOffCells * h_))) return false;
   m_.set_point(v, om(to));

@@ -64,9 +64,11 @@ class Improver {
     if (!to_openmesh(in, locked, {}, m_, locked_, origin_)) return;
     m_.add_property(slope_);
     m_.add_property(near_crease_);
+    m_.add_property(pinned_);
     for (const VH v : m_.vertices()) {
       m_.property(slope_, v) = std::nan("");
       m_.property(near_crease_, v) = !locked.empty() && locked[std::size_t(v.idx())] == kNearCrease;
+      m_.property(pinned_, v) = !locked.empty() && locked[std::size_t(v.idx())] == kPinned;
       if (m_.property(near_crease_, v)) m_.property(locked_, v) = false, creases_near_ = true;
     }
     // An open patch keeps its rim.
@@ -125,14 +127,18 @@ class Improver {
       if (locked(w)) return true;
     return false;
   }
-  // Next to a locked vertex that is no crease point (a rim's): such a vertex neither moves nor
-  // goes away. Beside a crease point it may, each step measured against the surface there
+  // Next to a locked vertex that holds its neighbours (a rim's, a pinned one): such a vertex
+  // neither moves nor goes away. Beside a crease point it may, each step measured against the surface there
   // (beside_crease): its faces lie on the crease's sheets, which crease points bound.
   bool near_rim(VH v) const {
     for (const VH w : m_.vv_range(v))
-      if (locked(w) && !on_crease(w)) return true;
+      if (holds_neighbours(w)) return true;
     return false;
   }
+  bool pinned(VH v) const { return m_.property(pinned_, v); }
+  // A locked vertex whose neighbours stay too: a rim's (a slab's, an open patch's, even a crease
+  // point on it) or a pinned one. An inner crease point's neighbours move.
+  bool holds_neighbours(VH w) const { return locked(w) && (!on_crease(w) || pinned(w) || m_.is_boundary(w)); }
   std::array<VH, 3> corners(FH f) const {
     const HH h = m_.halfedge_handle(f);
     return {m_.from_vertex_handle(h), m_.to_vertex_handle(h), m_.to_vertex_handle(m_.next_halfedge_handle(h))};
@@ -228,6 +234,7 @@ class Improver {
   OpenMesh::VPropHandleT<std::uint32_t> origin_;
   OpenMesh::VPropHandleT<double> slope_;  // f's derivative along the vertex normal, NaN until known
   OpenMesh::VPropHandleT<bool> near_crease_;  // kNearCrease: not locked, but its steps are checked (beside_crease)
+  OpenMesh::VPropHandleT<bool> pinned_;       // kPinned: locked, crease point or not
   bool creases_near_ = false;                // some vertex is kNearCrease
   std::vector<std::array<glm::dvec3, 3>> faces_;  // surface_kept's and relax's scratch
   const BatchField& field_;

@@ -37,14 +37,14 @@ void Improver::stay_on_surface(const std::vector<std::uint32_t>& movers, const s
 void Improver::relax(QualityStats& st) {
   // Only the corners of thin faces move: the rest is as good as relaxation makes it. The work
   // is on them, their rings (whose normals judge the moves) and the faces around them.
-  // Per vertex: 1 when locked or next to a locked rim vertex (near_rim, found from the few
+  // Per vertex: 1 when locked or next to a vertex that holds its neighbours (near_rim, found from the few
   // locked vertices' rings rather than every candidate's), 2 when it moves. Crease points'
   // neighbours move, held to the surface beside the crease.
   std::vector<std::uint8_t> wanted(m_.n_vertices(), 0);
   for (const VH v : m_.vertices())
     if (locked(v)) {
       wanted[std::size_t(v.idx())] = 1;
-      if (on_crease(v)) continue;
+      if (!holds_neighbours(v)) continue;
       for (const VH w : m_.vv_range(v)) wanted[std::size_t(w.idx())] = 1;
     }
   const std::vector<std::uint8_t> thin = thin_faces();

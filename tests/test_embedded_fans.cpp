@@ -120,6 +120,28 @@ TEST(EmbeddedFans, BoundariesPinchesAndFoldsAreNot) {
   expect_search_exact(pushed, "pushed through");
 }
 
+// A fan whose corner w lies within about 1e-10 of the direction it is projected along, with an
+// exact coplanar fold of (v, a, w) over (v, w, b): measured against the projected sides, the
+// margin let the rounding of w's tiny projection certify it (a review found this one).
+TEST(EmbeddedFans, ACornerAlongTheProjectionIsNoLoophole) {
+  TriangleMesh m;
+  m.positions = {{0x0p+0, 0x0p+0, 0x0p+0},
+                 {0x1.bd4870985890ep-1, -0x1.f670cdf6d382cp-5, 0x1p-2},
+                 {-0x1.0ade3d9e9dbc6p-1, -0x1.f670cdf6d382cp-3, 0x1p+0},
+                 {-0x1.904d5c6dec668p+0, -0x1.78d49a791ea21p-1, 0x1.8p+1},
+                 {0x1.0000000000001p-1, 0x1.bb67ae8584caap-1, -0x1.a6035b71dcc71p-3},
+                 {-0x1.3c6ef372fe94ep-2, 0x1.e6f0e134455p-1, 0x1.dd4714c3a0dc6p-3},
+                 {-0x1.d3bc3aeff7f94p-1, 0x1.a07f921061ad5p-2, 0x1.82d1dd9bd8102p-3},
+                 {-0x1.d3bc3aeff7f97p-1, -0x1.a07f921061acap-2, 0x1.2a27e4a560e7fp-2},
+                 {-0x1.3c6ef372fe952p-2, -0x1.e6f0e134454ffp-1, -0x1.2944509773899p-2},
+                 {0x1.ffffffffffff4p-2, -0x1.bb67ae8584caep-1, -0x1.87599e49f55fap-3}};
+  m.triangles = {{0, 1, 2}, {0, 2, 3}, {0, 3, 4}, {0, 4, 5}, {0, 5, 6}, {0, 6, 7}, {0, 7, 8}, {0, 8, 9}, {0, 9, 1}};
+  ASSERT_TRUE(triangles_intersect(m, 0, 1));
+  EXPECT_EQ(embedded_fans(m)[0], 0);
+  expect_sound(m, "corner along the normal");
+  expect_search_exact(m, "corner along the normal");
+}
+
 // The property: jitter from nothing to past folding, squashing to almost flat (turns near the
 // margin) and corners pulled together; the certificate never vouches for a fan that intersects.
 TEST(EmbeddedFans, CertifiedFansNeverIntersect) {
