@@ -38,33 +38,10 @@ struct Soup {
 
 Soup soup_of(const MeshLeaf& leaf) { return {leaf.positions(), leaf.triangles()}; }
 
-// An icosphere of radius r about c: 20 * 4^levels triangles, outward.
+// An icosphere of radius r about c: 20 * 4^levels triangles, outward (the test support's).
 Soup icosphere(int levels, double r, dvec3 c) {
-  const double g = (1 + std::sqrt(5.0)) / 2;
-  Soup s;
-  s.positions = {{-1, g, 0}, {1, g, 0}, {-1, -g, 0}, {1, -g, 0}, {0, -1, g}, {0, 1, g},
-                 {0, -1, -g}, {0, 1, -g}, {g, 0, -1}, {g, 0, 1}, {-g, 0, -1}, {-g, 0, 1}};
-  s.triangles = {{0, 11, 5}, {0, 5, 1}, {0, 1, 7}, {0, 7, 10}, {0, 10, 11}, {1, 5, 9}, {5, 11, 4},
-                 {11, 10, 2}, {10, 7, 6}, {7, 1, 8}, {3, 9, 4}, {3, 4, 2}, {3, 2, 6}, {3, 6, 8},
-                 {3, 8, 9}, {4, 9, 5}, {2, 4, 11}, {6, 2, 10}, {8, 6, 7}, {9, 8, 1}};
-  for (auto& p : s.positions) p = glm::normalize(p);
-  for (int l = 0; l < levels; ++l) {
-    std::map<std::pair<unsigned, unsigned>, unsigned> mid;
-    auto middle = [&](unsigned a, unsigned b) {
-      const auto key = std::minmax(a, b);
-      if (auto it = mid.find(key); it != mid.end()) return it->second;
-      s.positions.push_back(glm::normalize(s.positions[a] + s.positions[b]));
-      return mid[key] = static_cast<unsigned>(s.positions.size() - 1);
-    };
-    std::vector<glm::uvec3> next;
-    for (const auto& t : s.triangles) {
-      const unsigned ab = middle(t[0], t[1]), bc = middle(t[1], t[2]), ca = middle(t[2], t[0]);
-      next.insert(next.end(), {{t[0], ab, ca}, {t[1], bc, ab}, {t[2], ca, bc}, {ab, bc, ca}});
-    }
-    s.triangles = std::move(next);
-  }
-  for (auto& p : s.positions) p = c + r * p;
-  return s;
+  TriangleMesh m = test::icosphere(levels, r, c);
+  return {std::move(m.positions), std::move(m.triangles)};
 }
 
 // The faces within `rings` edge-neighbour steps of face `seed` (breadth-first over shared edges).
