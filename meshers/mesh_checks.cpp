@@ -274,34 +274,52 @@ void angle_census(const TriangleMesh& mesh, std::span<const std::uint8_t> kept, 
   std::tie(c.smooth_min_angle, c.smooth_min_angle_p1) = min_and_p1(smooth);
 }
 
+// What a first-order estimate reads where grad f is zero and f is not T.
+constexpr double kUnbounded = 1e300;
+
+double first_order(double f, const glm::dvec3& g, double T) {
+  const double gl = glm::length(g);
+  return gl > 0 ? std::abs(f - T) / gl : (std::abs(f - T) > 0 ? kUnbounded : 0.0);
+}
+
 template <class Gradient>
 void surface_error(const TriangleMesh& mesh, Gradient&& gradient, double T, MeshChecks& c,
                    std::span<const std::uint8_t> kept) {
-  std::vector<double> f;
+  std::vector<double> f, vertex_errors(mesh.positions.size());
   std::vector<glm::dvec3> g;
-  auto measure = [&](const std::vector<glm::dvec3>& pts, double& max, double& mean) {
-    if (pts.empty()) return;
+  auto evaluate = [&](const std::vector<glm::dvec3>& pts) {
     f.resize(pts.size());
     g.resize(pts.size());
-    gradient(pts, f, g);
-    double sum = 0;
-    max = 0;
-    for (std::size_t i = 0; i < pts.size(); ++i) {
-      const double gl = glm::length(g[i]);
-      const double e = gl > 0 ? std::abs(f[i] - T) / gl : (std::abs(f[i] - T) > 0 ? 1e300 : 0.0);
-      max = std::max(max, e);
-      sum += e;
-    }
-    mean = sum / double(pts.size());
+    if (!pts.empty()) gradient(pts, f, g);
   };
-  measure(mesh.positions, c.vertex_error_max, c.vertex_error_mean);
+  auto summarize = [](const std::vector<double>& errors, double& max, double& mean) {
+    max = mean = 0;
+    for (const double e : errors) max = std::max(max, e), mean += e;
+    if (!errors.empty()) mean /= double(errors.size());
+  };
+  evaluate(mesh.positions);
+  for (std::size_t v = 0; v < vertex_errors.size(); ++v) vertex_errors[v] = first_order(f[v], g[v], T);
+  summarize(vertex_errors, c.vertex_error_max, c.vertex_error_mean);
   const std::vector<glm::dvec3> at_vertices = g;
   std::vector<glm::dvec3> centres(mesh.triangles.size());
   for (std::size_t t = 0; t < centres.size(); ++t) {
     const auto& tri = mesh.triangles[t];
     centres[t] = (mesh.positions[tri[0]] + mesh.positions[tri[1]] + mesh.positions[tri[2]]) / 3.0;
   }
-  measure(centres, c.face_error_max, c.face_error_mean);
+  evaluate(centres);
+  // The quotient is the error's first-order estimate. Where grad f nearly vanishes (a small
+  // primitive's centre, a weak blend) it can read far more than the centre's distance to its
+  // nearest corner plus that corner's error, which bounds the true distance: it is capped there.
+  std::vector<double> face_errors(centres.size());
+  for (std::size_t t = 0; t < centres.size(); ++t) {
+    double bound = kUnbounded;
+    for (int k = 0; k < 3; ++k) {
+      const std::uint32_t v = mesh.triangles[t][k];
+      bound = std::min(bound, glm::distance(centres[t], mesh.positions[v]) + vertex_errors[v]);
+    }
+    face_errors[t] = std::min(first_order(f[t], g[t], T), bound);
+  }
+  summarize(face_errors, c.face_error_max, c.face_error_mean);
   // The field grows inward, so an outward face normal points against grad f.
   c.inverted_faces = 0;
   c.inverted_area = 0;

@@ -35,7 +35,9 @@ struct MeshChecks {
   double min_angle_p1 = 0;              ///< degrees: the first percentile of the triangles' smallest angles
   std::array<std::size_t, 6> min_angle_histogram{};  ///< triangles by min angle: [0,10) ... [50,60]
   // Surface error, filled by measure_surface_error(): distance to the isosurface estimated as
-  // |f - T| / |grad f|, at vertices and at face centres.
+  // |f - T| / |grad f|, at vertices and at face centres. A face centre's is capped by its
+  // distance to a corner plus that corner's: a bound on the true distance that holds where
+  // grad f vanishes (a small primitive's centre) and the quotient does not (it read 1e300 there).
   double vertex_error_max = 0, vertex_error_mean = 0, face_error_max = 0, face_error_mean = 0;
   /// Triangles whose normal points inward (against -grad f at their centre): folds, or slivers
   /// too thin for their orientation to matter (their area tells which).

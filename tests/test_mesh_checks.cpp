@@ -9,6 +9,7 @@
 #include "nodes/mesh_leaf.hpp"
 #include "runtime/builder.hpp"
 #include "runtime/scene.hpp"
+#include "runtime/tape_eval.hpp"
 #include "tests/support/test_support.hpp"
 
 #include <glm/geometric.hpp>
@@ -299,6 +300,36 @@ TEST(MeshChecks, LeafBlendedWithABallKeepsItsFarTriangles) {
   EXPECT_LT(c.kept_triangles, leaf->triangles().size());
   EXPECT_EQ(c.kept_triangles + c.crease_triangles + c.smooth_triangles, c.triangles);
   EXPECT_GT(c.smooth_triangles, 0u);
+}
+
+TEST(MeshChecks, FaceErrorIsBoundedWhereTheGradientVanishes) {
+  // A triangle through a point primitive's centre, its corners on the surface: grad f is zero
+  // at its centre, where |f - T| / |grad f| read 1e300 (the scatter scene reported it). The
+  // centre is one radius r from the surface and from each corner; the cap says r.
+  Builder b(kT);
+  const Tree t = b.build(b.point({0, 0, 0}, {1.0}));
+  double lo = 0, hi = 1;  // f(lo) > T > f(hi) along x
+  for (int i = 0; i < 60; ++i) (t.evaluator().field(glm::dvec3(0.5 * (lo + hi), 0, 0)) > kT ? lo : hi) = 0.5 * (lo + hi);
+  const double r = 0.5 * (lo + hi);
+  TriangleMesh m;
+  for (int k = 0; k < 3; ++k) {
+    const double a = 2.0 * std::acos(-1.0) * k / 3;
+    m.positions.push_back(r * glm::dvec3(std::cos(a), std::sin(a), 0));
+  }
+  m.triangles = {{0, 1, 2}, {0, 2, 1}};
+  MeshChecks c;
+  measure_surface_error(m, t.evaluator(), kT, c);
+  EXPECT_LT(c.vertex_error_max, 1e-5);
+  EXPECT_NEAR(c.face_error_max, r, 1e-5);
+  EXPECT_NEAR(c.face_error_mean, r, 1e-5);
+  // Where grad f is sound the quotient stands: a small triangle on the surface around +x, its
+  // corners 0.1 radians from the pole, has its centre r (1 - cos 0.1) inside.
+  for (int k = 0; k < 3; ++k) {
+    const double a = 2.0 * std::acos(-1.0) * k / 3;
+    m.positions[k] = r * glm::dvec3(std::cos(0.1), std::sin(0.1) * std::cos(a), std::sin(0.1) * std::sin(a));
+  }
+  measure_surface_error(m, t.evaluator(), kT, c);
+  EXPECT_NEAR(c.face_error_max, r * (1 - std::cos(0.1)), 0.05 * r * (1 - std::cos(0.1)));
 }
 
 TEST(MeshChecks, WithoutFullChecksTheTopologyStaysAndTheFieldIsNotTaken) {
