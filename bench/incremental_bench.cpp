@@ -6,10 +6,14 @@
 // quality-pass slabs and bands taken from the cache (bricks_reused of bricks, pieces_reused of pieces).
 //   Snake        tools/scenes.hpp snake(): one n-ary blend of 250 curves, moved: curve 100's
 //                first point by 0.01 in x
+//   SnakeDisk    the same edit through the disk level (`hybridtree mesh --cache DIR`): the edit
+//                meshed by a fresh cache over the folder the first meshing filled;
+//                ratio = edit_s / cold_s, cold_s the first meshing without any cache
 //   WingedBunny  examples/winged_bunny.json, the crop box's max y 0.42 -> 0.43
 // Quick mode meshes at twice the scenes' precision (coarser).
 #include "bench/bench_util.hpp"
 #include "meshers/mesh_plan.hpp"
+#include "meshers/disk_cache.hpp"
 #include "meshers/mesh_run.hpp"
 #include "meshers/node_cache.hpp"
 #include "runtime/scene.hpp"
@@ -19,6 +23,7 @@
 
 #include <array>
 #include <chrono>
+#include <filesystem>
 #include <cstdio>
 #include <fstream>
 #include <sstream>
@@ -90,6 +95,61 @@ void BM_IncrementalSnake(benchmark::State& state) {
   run(state, load_scene_text(text, "."), load_scene_text(moved, "."));
 }
 BENCHMARK(BM_IncrementalSnake)->Iterations(1)->UseRealTime()->Unit(benchmark::kSecond);
+
+// The snake's edit as `hybridtree mesh --cache DIR` runs it: the first meshing writes into an empty
+// folder, the edit is meshed by a fresh memory level over a fresh DiskCache of that folder (a new
+// process), so every brick and piece it takes comes from a file. Counters as above, plus
+// cold_s: the first meshing without any cache, and the parts read and written by the edit.
+void BM_IncrementalSnakeDisk(benchmark::State& state) {
+  const std::string text = scenes::snake_json(250, 1);
+  std::size_t at = 0;
+  for (int i = 0; i <= 100; ++i) at = text.find("\"points\": [[", at + 1);
+  const Tree before = load_scene_text(text, ".");
+  const Tree after = load_scene_text(edit_number(text, at + 12, [](double x) { return x + 0.01; }), ".");
+  MeshOptions o;
+  o.precision = default_precision(before, 0.0) * (bench::quick_mode ? 2.0 : 1.0);
+  o.blend_overlap = before.mesher_settings().blend_overlap;
+  const std::filesystem::path dir = std::filesystem::temp_directory_path() / "hybridtree-bench-disk-cache";
+  double plain = 0, first = 0, edit = 0;
+  DiskCacheStats parts;
+  std::size_t bricks = 0, active = 0;
+  for (auto _ : state) {
+    std::filesystem::remove_all(dir);
+    auto t0 = std::chrono::steady_clock::now();
+    benchmark::DoNotOptimize(mesh_tree(before, o).mesh->triangles.size());
+    plain = seconds_since(t0);
+    {
+      DiskCache disk(dir);
+      NodeCache cache(std::size_t(2) << 30, &disk);
+      o.cache = &cache;
+      t0 = std::chrono::steady_clock::now();
+      benchmark::DoNotOptimize(mesh_tree(before, o).mesh->triangles.size());
+      disk.flush();
+      first = seconds_since(t0);
+    }
+    DiskCache disk(dir);
+    NodeCache cache(std::size_t(2) << 30, &disk);
+    o.cache = &cache;
+    t0 = std::chrono::steady_clock::now();
+    const MeshResult b = mesh_tree(after, o);
+    disk.flush();
+    edit = seconds_since(t0);
+    parts = disk.stats();
+    bricks = active = 0;
+    for (const NodeReport& r : b.nodes) bricks += r.polygonize.bricks_reused, active += r.polygonize.bricks_active;
+    o.cache = nullptr;
+  }
+  std::filesystem::remove_all(dir);
+  state.counters["cold_s"] = plain;
+  state.counters["first_s"] = first;
+  state.counters["edit_s"] = edit;
+  state.counters["ratio"] = edit / plain;
+  state.counters["bricks_reused"] = double(bricks);
+  state.counters["bricks"] = double(active);
+  state.counters["parts_read"] = double(parts.part_hits);
+  state.counters["parts_written"] = double(parts.part_written);
+}
+BENCHMARK(BM_IncrementalSnakeDisk)->Iterations(1)->UseRealTime()->Unit(benchmark::kSecond);
 
 void BM_IncrementalWingedBunny(benchmark::State& state) {
   const std::filesystem::path file = std::filesystem::path(HYBRIDTREE_SOURCE_DIR) / "examples/winged_bunny.json";

@@ -1,5 +1,6 @@
 #include "meshers/disk_cache.hpp"
 
+#include "meshers/cache_bytes.hpp"
 #include "meshers/disk_cache_build.hpp"  // generated: HYBRIDTREE_SOURCE_DIGEST (cmake/SourceDigest.cmake)
 #include "runtime/subtree_hash.hpp"
 
@@ -22,6 +23,10 @@ namespace ht {
 
 const std::uint64_t kDiskCacheBuild = HYBRIDTREE_SOURCE_DIGEST;
 
+// The largest enumerators a report may hold (CacheReader rejects more).
+constexpr std::uint8_t cache_enum_limit(JobStrategy) { return std::uint8_t(JobStrategy::TrimLocalBlend); }
+constexpr std::uint8_t cache_enum_limit(JobReason) { return std::uint8_t(JobReason::Fallback); }
+
 namespace {
 
 namespace fs = std::filesystem;
@@ -31,8 +36,8 @@ constexpr std::size_t kHeaderBytes = 48;
 constexpr std::size_t kSealedBytes = 40;  // the header's bytes before the checksum
 constexpr std::uint64_t kChecksumSeed = 0x4854636163686521ull;  // "HTcache!"
 constexpr double kStaleTemporarySeconds = 3600.0;
+constexpr std::size_t kMaxQueuedBytes = std::size_t(256) << 20;  // parts waiting for the writer thread
 
-static_assert(std::endian::native == std::endian::little, "cache files are little-endian, written as in memory");
 static_assert(sizeof(glm::dvec3) == 24 && sizeof(glm::uvec3) == 12, "positions and triangles are stored as arrays");
 // A new report or statistics field must be stored by the field lists below (and
 // kDiskCacheLayout bumped): these trip when one is added.
@@ -40,8 +45,8 @@ static_assert(sizeof(PolygonizeStats) == 368, "store the new PolygonizeStats fie
 static_assert(sizeof(LocalStats) == 528, "store the new LocalStats field in meshers/disk_cache.cpp");
 static_assert(sizeof(NodeReport) == 1008, "store the new NodeReport field in meshers/disk_cache.cpp");
 
-// The field lists: one per struct, read and written through the same list (Io is Writer or
-// Reader; S is const for the writer).
+// The field lists: one per struct, read and written through the same list (Io is CacheWriter or
+// CacheReader; S is const for the writer).
 template <class Io, class S>
 void polygonize_fields(Io& io, S& p) {
   io(p.bricks_total, p.bricks_active, p.points_evaluated, p.crease_edges, p.corner_vertices, p.crease_candidates,
@@ -74,119 +79,6 @@ void report_fields(Io& io, R& r) {
   io(r.edges_split, r.refinements);
 }
 
-constexpr std::uint8_t enum_limit(JobStrategy) { return std::uint8_t(JobStrategy::TrimLocalBlend); }
-constexpr std::uint8_t enum_limit(JobReason) { return std::uint8_t(JobReason::Fallback); }
-
-class Writer {
- public:
-  std::string out;
-
-  template <class... T>
-  void operator()(const T&... values) {
-    (put(values), ...);
-  }
-  void word(std::uint64_t w) { bytes(&w, 8); }
-  void bytes(const void* data, std::size_t count) {
-    if (count) out.append(static_cast<const char*>(data), count);
-  }
-
- private:
-  template <class T>
-  void put(const T& v) {
-    if constexpr (std::is_same_v<T, bool> || std::is_enum_v<T>) {
-      out.push_back(static_cast<char>(v));
-    } else if constexpr (std::is_integral_v<T>) {
-      word(static_cast<std::uint64_t>(v));
-    } else if constexpr (std::is_same_v<T, double>) {
-      word(std::bit_cast<std::uint64_t>(v));
-    } else if constexpr (std::is_same_v<T, Aabb>) {
-      for (const glm::dvec3& c : {v.lo, v.hi}) (*this)(c.x, c.y, c.z);
-    } else if constexpr (std::is_same_v<T, std::string>) {
-      word(v.size());
-      out.append(v);
-    } else {
-      static_assert(std::is_same_v<T, std::vector<std::string>>);
-      word(v.size());
-      for (const std::string& s : v) put(s);
-    }
-  }
-};
-
-// Reads what Writer wrote. Every count is checked against the bytes left before anything is
-// allocated for it; the first problem is kept in error() and later reads give zeros.
-class Reader {
- public:
-  explicit Reader(std::string_view in) : in_(in) {}
-
-  template <class... T>
-  void operator()(T&... values) {
-    (get(values), ...);
-  }
-  std::uint64_t word() {
-    std::uint64_t w = 0;
-    bytes(&w, 8);
-    return w;
-  }
-  void bytes(void* data, std::size_t count) {
-    if (count > remaining()) {
-      fail("the file ends inside its payload");
-      return;
-    }
-    if (count) std::memcpy(data, in_.data() + pos_, count);
-    pos_ += count;
-  }
-  /// False (and the error set) when `count` items of `item_bytes` each cannot fit in what is left.
-  bool fits(std::uint64_t count, std::size_t item_bytes, const char* what) {
-    if (count <= remaining() / item_bytes) return true;
-    fail(std::to_string(count) + " " + what + " cannot fit in the " + std::to_string(remaining()) + " bytes left");
-    return false;
-  }
-  void fail(std::string why) {
-    if (error_.empty()) error_ = std::move(why);
-    pos_ = in_.size();
-  }
-  std::size_t remaining() const { return in_.size() - pos_; }
-  const std::string& error() const { return error_; }
-
- private:
-  template <class T>
-  void get(T& v) {
-    if constexpr (std::is_same_v<T, bool> || std::is_enum_v<T>) {
-      std::uint8_t b = 0;
-      bytes(&b, 1);
-      if constexpr (std::is_same_v<T, bool>) {
-        if (b > 1) fail("a flag of " + std::to_string(b));
-        v = b != 0;
-      } else {
-        if (b > enum_limit(T{})) fail("an unknown strategy or reason (" + std::to_string(b) + ")");
-        v = static_cast<T>(b);
-      }
-    } else if constexpr (std::is_integral_v<T>) {
-      const std::uint64_t w = word();
-      v = static_cast<T>(w);
-      if (static_cast<std::uint64_t>(v) != w) fail("a count out of range (" + std::to_string(w) + ")");
-    } else if constexpr (std::is_same_v<T, double>) {
-      v = std::bit_cast<double>(word());
-    } else if constexpr (std::is_same_v<T, Aabb>) {
-      (*this)(v.lo.x, v.lo.y, v.lo.z, v.hi.x, v.hi.y, v.hi.z);
-    } else if constexpr (std::is_same_v<T, std::string>) {
-      const std::uint64_t n = word();
-      if (!fits(n, 1, "string bytes")) return;
-      v.assign(in_.data() + pos_, n);
-      pos_ += n;
-    } else {
-      static_assert(std::is_same_v<T, std::vector<std::string>>);
-      const std::uint64_t n = word();
-      if (!fits(n, 8, "strings")) return;
-      v.resize(n);
-      for (std::string& s : v) get(s);
-    }
-  }
-
-  std::string_view in_;
-  std::size_t pos_ = 0;
-  std::string error_;
-};
 
 std::uint64_t load_word(std::string_view bytes, std::size_t at) {
   std::uint64_t w;
@@ -206,7 +98,7 @@ std::string hex(std::uint64_t v) {
 }
 
 // The mesh, its indices checked against its vertices.
-bool read_mesh(Reader& in, TriangleMesh& m) {
+bool read_mesh(CacheReader& in, TriangleMesh& m) {
   const std::uint64_t vertices = in.word(), triangles = in.word();
   if (!in.fits(vertices, sizeof(glm::dvec3), "vertices")) return false;
   m.positions.resize(vertices);
@@ -277,9 +169,11 @@ bool write_new_file(const fs::path& file, std::string_view bytes, std::string& w
   return why.empty();
 }
 
-// "0123456789abcdef.htc"
+// "0123456789abcdef.htc", or with -b, -q or -c before ".htc"
 bool is_entry_name(const std::string& name) {
-  if (name.size() != 20 || !name.ends_with(".htc")) return false;
+  if (!name.ends_with(".htc")) return false;
+  if (name.size() == 22 && !(name[16] == '-' && (name[17] == 'b' || name[17] == 'q' || name[17] == 'c'))) return false;
+  if (name.size() != 20 && name.size() != 22) return false;
   return std::all_of(name.begin(), name.begin() + 16, [](char c) { return (c >= '0' && c <= '9') || (c >= 'a' && c <= 'f'); });
 }
 
@@ -295,25 +189,29 @@ const char* to_string(DiskIgnore reason) {
   return kNames[static_cast<std::size_t>(reason)];
 }
 
+std::string seal_cache_entry(CacheKind kind, std::uint64_t key, std::string_view payload) {
+  CacheWriter w;
+  w.bytes(kMagic, sizeof kMagic);
+  w.word(std::uint64_t(kDiskCacheLayout) | std::uint64_t(kind) << 32);  // u32 layout, u32 kind
+  w.word(kDiskCacheBuild);
+  w.word(key);
+  w.word(payload.size());
+  w.word(0);  // checksum
+  w.bytes(payload.data(), payload.size());
+  reseal_cache_entry(w.out);
+  return std::move(w.out);
+}
+
 std::string encode_cache_entry(std::uint64_t key, const CachedJob& job) {
   static const TriangleMesh kEmpty;
   const TriangleMesh& m = job.mesh ? *job.mesh : kEmpty;
-  Writer w;
-  w.bytes(kMagic, sizeof kMagic);
-  w.word(std::uint64_t(kDiskCacheLayout));  // u32 layout, u32 zero
-  w.word(kDiskCacheBuild);
-  w.word(key);
-  w.word(0);  // payload bytes
-  w.word(0);  // checksum
+  CacheWriter w;
   w.word(m.positions.size());
   w.word(m.triangles.size());
   w.bytes(m.positions.data(), m.positions.size() * sizeof(glm::dvec3));
   w.bytes(m.triangles.data(), m.triangles.size() * sizeof(glm::uvec3));
   report_fields(w, job.report);
-  const std::uint64_t payload = w.out.size() - kHeaderBytes;
-  std::memcpy(w.out.data() + 32, &payload, 8);
-  reseal_cache_entry(w.out);
-  return std::move(w.out);
+  return seal_cache_entry(CacheKind::Job, key, w.out);
 }
 
 void reseal_cache_entry(std::string& bytes) {
@@ -321,15 +219,16 @@ void reseal_cache_entry(std::string& bytes) {
   std::memcpy(bytes.data() + kSealedBytes, &sum, 8);
 }
 
-std::optional<CachedJob> decode_cache_entry(std::string_view bytes, std::uint64_t key, CacheEntryError* error) {
-  auto fail = [&](DiskIgnore reason, std::string detail) -> std::optional<CachedJob> {
+std::optional<std::string_view> open_cache_entry(std::string_view bytes, CacheKind kind, std::uint64_t key,
+                                                 CacheEntryError* error) {
+  auto fail = [&](DiskIgnore reason, std::string detail) -> std::optional<std::string_view> {
     if (error) *error = CacheEntryError{reason, std::move(detail)};
     return std::nullopt;
   };
   if (bytes.size() < kHeaderBytes)
     return fail(DiskIgnore::Truncated, std::to_string(bytes.size()) + " bytes, shorter than the 48-byte header");
   if (std::memcmp(bytes.data(), kMagic, sizeof kMagic) != 0) return fail(DiskIgnore::Magic, "not a HybridTree cache file (bad magic)");
-  const std::uint64_t layout = load_word(bytes, 8), build = load_word(bytes, 16);
+  const std::uint64_t layout = load_word(bytes, 8) & 0xffffffffu, build = load_word(bytes, 16);
   if (layout != kDiskCacheLayout || build != kDiskCacheBuild)
     return fail(DiskIgnore::Stale, "stale: written by another build (layout " + std::to_string(layout) + ", build " +
                                        hex(build) + "; this is layout " + std::to_string(kDiskCacheLayout) + ", build " +
@@ -342,12 +241,25 @@ std::optional<CachedJob> decode_cache_entry(std::string_view bytes, std::uint64_
     return fail(DiskIgnore::Length, std::to_string(held) + " payload bytes where its header states " + std::to_string(payload));
   if (checksum(bytes) != load_word(bytes, kSealedBytes)) return fail(DiskIgnore::Checksum, "checksum mismatch (corrupt)");
   if (load_word(bytes, 24) != key) return fail(DiskIgnore::Key, "holds the entry of key " + hex(load_word(bytes, 24)));
-  Reader in(bytes.substr(kHeaderBytes));
+  const std::uint64_t held_kind = load_word(bytes, 8) >> 32;
+  if (held_kind != std::uint64_t(kind))
+    return fail(DiskIgnore::Key, "holds an entry of kind " + std::to_string(held_kind) + ", not " +
+                                     std::to_string(std::uint32_t(kind)));
+  return bytes.substr(kHeaderBytes);
+}
+
+std::optional<CachedJob> decode_cache_entry(std::string_view bytes, std::uint64_t key, CacheEntryError* error) {
+  const std::optional<std::string_view> payload = open_cache_entry(bytes, CacheKind::Job, key, error);
+  if (!payload) return std::nullopt;
+  CacheReader in(*payload);
   auto mesh = std::make_shared<TriangleMesh>();
   CachedJob job;
   if (read_mesh(in, *mesh)) report_fields(in, job.report);
   if (in.error().empty() && in.remaining()) in.fail(std::to_string(in.remaining()) + " bytes after the report");
-  if (!in.error().empty()) return fail(DiskIgnore::Contents, "bad contents: " + in.error());
+  if (!in.error().empty()) {
+    if (error) *error = CacheEntryError{DiskIgnore::Contents, "bad contents: " + in.error()};
+    return std::nullopt;
+  }
   job.mesh = std::move(mesh);
   return job;
 }
@@ -363,6 +275,9 @@ DiskCacheStats operator-(const DiskCacheStats& a, const DiskCacheStats& b) {
   d.hits = a.hits - b.hits;
   d.misses = a.misses - b.misses;
   d.written = a.written - b.written;
+  d.part_hits = a.part_hits - b.part_hits;
+  d.part_misses = a.part_misses - b.part_misses;
+  d.part_written = a.part_written - b.part_written;
   d.write_failures = a.write_failures - b.write_failures;
   d.evicted = a.evicted - b.evicted;
   for (std::size_t i = 0; i < kDiskIgnoreReasons; ++i) d.ignored[i] = a.ignored[i] - b.ignored[i];
@@ -378,25 +293,33 @@ DiskCache::DiskCache(fs::path dir, std::uint64_t max_bytes, Warn warn)
     throw DiskCacheError(dir_.string() + ": cannot make the cache folder" + (ec ? ": " + ec.message() : ""));
 }
 
-fs::path DiskCache::file_of(std::uint64_t key) const { return dir_ / (hex(key) + ".htc"); }
+fs::path DiskCache::file_of(std::uint64_t key, CacheKind kind) const {
+  static constexpr const char* kSuffix[kCacheKinds] = {".htc", "-b.htc", "-q.htc", "-c.htc"};
+  return dir_ / (hex(key) + kSuffix[static_cast<std::size_t>(kind)]);
+}
+
+bool DiskCache::read_entry(std::uint64_t key, CacheKind kind, std::string& bytes) {
+  const fs::path file = file_of(key, kind);
+  std::string why;
+  const ReadStatus status = read_file(file, bytes, why);
+  if (status == ReadStatus::Ok) return true;
+  if (status == ReadStatus::Failed) {
+    ignore(file, {DiskIgnore::Unreadable, "unreadable: " + why}, kind);
+    return false;
+  }
+  std::lock_guard lock(mutex_);
+  ++(kind == CacheKind::Job ? stats_.misses : stats_.part_misses);
+  return false;
+}
 
 std::optional<CachedJob> DiskCache::find(std::uint64_t key) {
+  std::string bytes;
+  if (!read_entry(key, CacheKind::Job, bytes)) return std::nullopt;
   const fs::path file = file_of(key);
-  std::string bytes, why;
-  const ReadStatus status = read_file(file, bytes, why);
-  if (status == ReadStatus::Missing) {
-    std::lock_guard lock(mutex_);
-    ++stats_.misses;
-    return std::nullopt;
-  }
-  if (status == ReadStatus::Failed) {
-    ignore(file, {DiskIgnore::Unreadable, "unreadable: " + why});
-    return std::nullopt;
-  }
   CacheEntryError error;
   std::optional<CachedJob> job = decode_cache_entry(bytes, key, &error);
   if (!job) {
-    ignore(file, error);
+    ignore(file, error, CacheKind::Job);
     return std::nullopt;
   }
   ::utimensat(AT_FDCWD, file.c_str(), nullptr, 0);  // now the most recently used (trim())
@@ -405,35 +328,116 @@ std::optional<CachedJob> DiskCache::find(std::uint64_t key) {
   return job;
 }
 
-void DiskCache::ignore(const fs::path& file, const CacheEntryError& error) {
+bool DiskCache::find_part(CacheKind kind, std::uint64_t key,
+                          const std::function<bool(std::string_view payload, std::string& why)>& decode) {
+  std::string bytes;
+  if (!read_entry(key, kind, bytes)) return false;
+  const fs::path file = file_of(key, kind);
+  CacheEntryError error;
+  const std::optional<std::string_view> payload = open_cache_entry(bytes, kind, key, &error);
+  std::string why;
+  if (!payload || !decode(*payload, why)) {
+    ignore(file, payload ? CacheEntryError{DiskIgnore::Contents, "bad contents: " + why} : error, kind);
+    return false;
+  }
+  ::utimensat(AT_FDCWD, file.c_str(), nullptr, 0);
   std::lock_guard lock(mutex_);
-  ++stats_.misses;
+  ++stats_.part_hits;
+  return true;
+}
+
+void DiskCache::ignore(const fs::path& file, const CacheEntryError& error, CacheKind kind) {
+  static constexpr const char* kAfter[kCacheKinds] = {"the job runs instead", "the brick is extracted again",
+                                                      "the quality piece is improved again",
+                                                      "the region is searched again"};
+  std::lock_guard lock(mutex_);
+  ++(kind == CacheKind::Job ? stats_.misses : stats_.part_misses);
   ++stats_.ignored[static_cast<std::size_t>(error.reason)];
-  if (warned_.insert(file.string()).second)
-    warn_("ignoring cache file " + file.string() + ": " + error.detail + "; the job runs instead");
+  // After a rebuild every file is stale: the first is named, the rest are counted only.
+  if (error.reason == DiskIgnore::Stale && warned_stale_) return;
+  if (!warned_.insert(file.string()).second) return;
+  std::string line = "ignoring cache file " + file.string() + ": " + error.detail + "; " + kAfter[static_cast<std::size_t>(kind)];
+  if (error.reason == DiskIgnore::Stale) line += " (other stale files are ignored without a warning)";
+  warned_stale_ |= error.reason == DiskIgnore::Stale;
+  warn_(line);
 }
 
 std::string DiskCache::temporary_name() {
   return ".tmp-" + std::to_string(::getpid()) + "-" + std::to_string(counter_++) + "-" + hex(nonce_) + ".partial";
 }
 
-void DiskCache::store(std::uint64_t key, const CachedJob& job) {
-  const std::string bytes = encode_cache_entry(key, job);
-  const fs::path tmp = dir_ / temporary_name(), file = file_of(key);
+bool DiskCache::write_entry(const fs::path& file, std::string_view bytes) {
+  const fs::path tmp = dir_ / temporary_name();
   std::string why;
   if (write_new_file(tmp, bytes, why) && ::rename(tmp.c_str(), file.c_str()) != 0) why = std::strerror(errno);
-  std::lock_guard lock(mutex_);
-  if (why.empty()) {
-    ++stats_.written;
-    return;
-  }
+  if (why.empty()) return true;
   ::unlink(tmp.c_str());
+  std::lock_guard lock(mutex_);
   ++stats_.write_failures;
   if (!warned_write_) warn_("cannot write cache file " + file.string() + ": " + why + "; results are not being kept");
   warned_write_ = true;
+  return false;
+}
+
+void DiskCache::store(std::uint64_t key, const CachedJob& job) {
+  if (!write_entry(file_of(key), encode_cache_entry(key, job))) return;
+  std::lock_guard lock(mutex_);
+  ++stats_.written;
+}
+
+void DiskCache::store_part(CacheKind kind, std::uint64_t key, std::string payload) {
+  {
+    std::lock_guard lock(queue_mutex_);
+    if (queued_bytes_ + payload.size() <= kMaxQueuedBytes) {
+      queued_bytes_ += payload.size();
+      queue_.push_back({kind, key, std::move(payload)});
+      if (!writer_.joinable()) writer_ = std::thread([this] { write_queued(); });
+      queue_wake_.notify_one();
+      return;
+    }
+  }
+  write_part(kind, key, payload);
+}
+
+void DiskCache::write_part(CacheKind kind, std::uint64_t key, std::string_view payload) {
+  if (!write_entry(file_of(key, kind), seal_cache_entry(kind, key, payload))) return;
+  std::lock_guard lock(mutex_);
+  ++stats_.part_written;
+}
+
+void DiskCache::write_queued() {
+  std::unique_lock lock(queue_mutex_);
+  for (;;) {
+    queue_wake_.wait(lock, [this] { return stopping_ || !queue_.empty(); });
+    if (queue_.empty()) return;  // stopping, all written
+    Queued next = std::move(queue_.front());
+    queue_.pop_front();
+    writing_ = true;
+    lock.unlock();
+    write_part(next.kind, next.key, next.payload);
+    lock.lock();
+    queued_bytes_ -= next.payload.size();
+    writing_ = false;
+    if (queue_.empty()) queue_idle_.notify_all();
+  }
+}
+
+void DiskCache::flush() {
+  std::unique_lock lock(queue_mutex_);
+  queue_idle_.wait(lock, [this] { return queue_.empty() && !writing_; });
+}
+
+DiskCache::~DiskCache() {
+  {
+    std::lock_guard lock(queue_mutex_);
+    stopping_ = true;
+  }
+  queue_wake_.notify_all();
+  if (writer_.joinable()) writer_.join();
 }
 
 std::size_t DiskCache::trim() {
+  flush();
   struct Entry {
     fs::path file;
     std::uint64_t bytes;
@@ -466,7 +470,8 @@ std::size_t DiskCache::trim() {
   return removed;
 }
 
-DiskCacheStats DiskCache::stats() const {
+DiskCacheStats DiskCache::stats() {
+  flush();
   std::lock_guard lock(mutex_);
   return stats_;
 }

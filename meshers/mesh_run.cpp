@@ -133,7 +133,8 @@ nlohmann::json disk_json(const DiskCacheStats& s) {
           {"written", s.written},
           {"write_failures", s.write_failures},
           {"evicted", s.evicted},
-          {"ignored", ignored}};
+          {"ignored", ignored},
+          {"parts", {{"hits", s.part_hits}, {"misses", s.part_misses}, {"written", s.part_written}}}};
 }
 
 nlohmann::json checks_json(const MeshChecks& c) {

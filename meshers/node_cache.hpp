@@ -11,7 +11,8 @@
 // stays alive while a run still holds it.
 //
 // Given a DiskCache (meshers/disk_cache.hpp), it is the first of two levels: a miss in memory
-// looks on disk (a hit there enters memory), and every insert is written through to disk.
+// looks on disk (a hit there enters memory), and every insert is written through to disk; the
+// parts of polygonizations too (pieces()).
 #pragma once
 
 #include "meshers/mesh_plan.hpp"
@@ -42,9 +43,12 @@ class DiskCache;
 class NodeCache {
  public:
   /// Half of `max_bytes` holds job results, half the parts of polygonizations (pieces()).
-  /// `disk`, when given, is the job results' second level (not owned; it must outlive this cache).
+  /// `disk`, when given, is the second level of job results and parts (not owned; it must outlive
+  /// this cache).
   explicit NodeCache(std::size_t max_bytes, DiskCache* disk = nullptr)
-      : jobs_(max_bytes - max_bytes / 2), pieces_(max_bytes / 2), disk_(disk) {}
+      : jobs_(max_bytes - max_bytes / 2), pieces_(max_bytes / 2), disk_(disk) {
+    pieces_.set_disk(disk);
+  }
   NodeCache(const NodeCache&) = delete;
   NodeCache& operator=(const NodeCache&) = delete;
 

@@ -23,6 +23,8 @@
 
 namespace ht {
 
+class DiskCache;
+
 struct PieceCacheStats {
   std::size_t hits = 0, misses = 0, insertions = 0, evictions = 0;
   std::size_t entries = 0, bytes = 0;
@@ -49,6 +51,12 @@ class PieceCache {
   std::size_t max_bytes() const { return max_bytes_; }
   void clear();
 
+  /// The disk level of the parts (not owned; it must outlive this cache), or null: the parts'
+  /// owners read a part missing here from it and write new ones through to it
+  /// (meshers/polygonize_reuse.hpp find_kept, keep; meshers/quality_pieces.cpp).
+  void set_disk(DiskCache* disk) { disk_ = disk; }
+  DiskCache* disk() const { return disk_; }
+
  private:
   template <class T>
   static const void* type_id() {
@@ -65,6 +73,7 @@ class PieceCache {
     std::size_t bytes;
   };
   std::size_t max_bytes_;
+  DiskCache* disk_ = nullptr;
   mutable std::mutex mutex_;
   std::list<Entry> lru_;  // front: most recently used
   std::unordered_map<std::uint64_t, std::list<Entry>::iterator> index_;

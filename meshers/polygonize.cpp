@@ -278,7 +278,7 @@ TriangleMesh polygonize_once(std::shared_ptr<const Graph> graph, NodeId root, do
     keys.resize(active.size());
     tbb::parallel_for(std::size_t(0), active.size(), [&](std::size_t a) {
       keys[a] = brick::brick_key(view, grid.brick_at(active[a]), T, options);
-      kept[a] = options.pieces->find<brick::KeptBrick>(keys[a]);
+      kept[a] = brick::find_kept(*options.pieces, keys[a]);
     });
     for (const auto& k : kept) stats.bricks_reused += k != nullptr;
   }
@@ -409,10 +409,7 @@ TriangleMesh polygonize_once(std::shared_ptr<const Graph> graph, NodeId root, do
     if (options.sharp_features && may_have_creases(*tapes[a])) brick::crease_normals(own, eval, options.features, sc, out);
     if (options.brick_filter) brick::drop_unsampled(grid, b, own, wanted[a], sc, out);
     if (!keys.empty())
-      if (auto k = std::make_shared<const brick::KeptBrick>(brick::KeptBrick{out, boundary})) {
-        const std::size_t bytes = brick::kept_bytes(*k);
-        options.pieces->insert<brick::KeptBrick>(keys[a], std::move(k), bytes);
-      }
+      brick::keep(*options.pieces, keys[a], std::make_shared<const brick::KeptBrick>(brick::KeptBrick{out, boundary}));
     report(0.6, 0.3);
   });
   stats.seconds_extract = seconds_since(t0);

@@ -10,6 +10,11 @@
 //
 // The quality pass's pieces (meshers/quality.hpp QualityReuse) see the field as these bricks:
 // a piece is taken again when the bricks it evaluated the field in still have the same tapes.
+//
+// With a disk level (`hybridtree mesh --cache DIR`), kept bricks and clean regions are files of
+// DIR too (meshers/disk_cache.hpp): one per brick, its vertices (edge key, brick, position,
+// normal) and triangles (three edge keys), checked when read back (keys strictly increasing,
+// every triangle's keys among the vertices, positions finite).
 #pragma once
 
 #include "meshers/brick_extract.hpp"
@@ -63,5 +68,11 @@ bool clean_by_regions(const TriangleMesh& mesh, double thickness, PieceCache& ca
 
 /// The bytes a kept brick is charged in the cache.
 std::size_t kept_bytes(const KeptBrick& k);
+
+/// The extraction kept under `key`: from memory, else from the cache's disk level (then kept in
+/// memory too), else null.
+std::shared_ptr<const KeptBrick> find_kept(PieceCache& cache, std::uint64_t key);
+/// Keeps `brick` under `key`, in memory and on the cache's disk level.
+void keep(PieceCache& cache, std::uint64_t key, std::shared_ptr<const KeptBrick> brick);
 
 }  // namespace ht::brick

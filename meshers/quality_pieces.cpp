@@ -3,6 +3,8 @@
 // from a PieceCache when its input and field were seen before.
 #include "meshers/quality.hpp"
 
+#include "meshers/cache_bytes.hpp"
+#include "meshers/disk_cache.hpp"
 #include "meshers/piece_cache.hpp"
 #include "meshers/quality_whole.hpp"
 #include "meshers/relax.hpp"
@@ -39,6 +41,11 @@ struct QualityPiece {
   QualityStats stats;
   std::vector<std::pair<std::uint64_t, std::uint64_t>> parts;  // (part, key), by part
 };
+
+// The bytes a piece is charged in the cache.
+std::size_t piece_bytes(const QualityPiece& p) {
+  return 128 + 24 * p.mesh.positions.size() + 12 * p.mesh.triangles.size() + 4 * p.origin.size() + 16 * p.parts.size();
+}
 
 std::uint64_t mix_double(std::uint64_t k, double v) { return hash_mix(k, std::bit_cast<std::uint64_t>(v)); }
 
@@ -84,6 +91,71 @@ class PartRecorder {
   std::vector<std::uint64_t> parts_;
 };
 
+// A piece as a disk entry's payload (meshers/disk_cache.hpp): its mesh, origins, statistics and
+// the parts of the field it read with their keys.
+static_assert(sizeof(QualityStats) == 80, "store the new QualityStats field in encode_piece and decode_piece");
+template <class Io, class S>
+void stats_fields(Io& io, S& s) {
+  io(s.collapses, s.flips, s.splits, s.moved, s.reverted, s.pieces, s.pieces_reused, s.retries, s.skipped, s.seconds);
+}
+
+std::string encode_piece(const QualityPiece& p) {
+  CacheWriter w;
+  w(p.mesh.positions.size(), p.mesh.triangles.size(), p.parts.size());
+  w.bytes(p.mesh.positions.data(), p.mesh.positions.size() * sizeof(glm::dvec3));
+  w.bytes(p.mesh.triangles.data(), p.mesh.triangles.size() * sizeof(glm::uvec3));
+  w.bytes(p.origin.data(), p.origin.size() * sizeof(std::uint32_t));
+  w.bytes(p.parts.data(), p.parts.size() * sizeof(p.parts[0]));
+  stats_fields(w, p.stats);
+  return std::move(w.out);
+}
+
+// What encode_piece wrote, checked against the piece's input (`inputs` vertices): indices within
+// the mesh, origins within the input or new (~0u).
+bool decode_piece(std::string_view payload, std::size_t inputs, QualityPiece& p, std::string& why) {
+  CacheReader in(payload);
+  std::size_t nv = 0, nt = 0, np = 0;
+  in(nv, nt, np);
+  if (in.fits(nv, sizeof(glm::dvec3) + 4, "vertices")) {
+    p.mesh.positions.resize(nv);
+    in.bytes(p.mesh.positions.data(), nv * sizeof(glm::dvec3));
+  }
+  if (in.error().empty() && in.fits(nt, sizeof(glm::uvec3), "triangles")) {
+    p.mesh.triangles.resize(nt);
+    in.bytes(p.mesh.triangles.data(), nt * sizeof(glm::uvec3));
+  }
+  if (in.error().empty()) {
+    p.origin.resize(nv);
+    in.bytes(p.origin.data(), nv * sizeof(std::uint32_t));
+  }
+  if (in.error().empty() && in.fits(np, sizeof(p.parts[0]), "parts")) {
+    p.parts.resize(np);
+    in.bytes(p.parts.data(), np * sizeof(p.parts[0]));
+  }
+  stats_fields(in, p.stats);
+  if (in.error().empty() && in.remaining()) in.fail(std::to_string(in.remaining()) + " bytes after the statistics");
+  for (std::size_t t = 0; in.error().empty() && t < nt; ++t)
+    if (glm::any(glm::greaterThanEqual(p.mesh.triangles[t], glm::uvec3(std::uint32_t(nv)))))
+      in.fail("triangle " + std::to_string(t) + " names a vertex past the " + std::to_string(nv));
+  for (std::size_t v = 0; in.error().empty() && v < nv; ++v)
+    if (p.origin[v] != ~0u && p.origin[v] >= inputs) in.fail("vertex " + std::to_string(v) + " comes from past the input");
+  why = in.error();
+  return why.empty();
+}
+
+// The piece under `key`: from memory, else from the disk level (then in memory too), else null.
+std::shared_ptr<const QualityPiece> find_piece(PieceCache& cache, std::uint64_t key, std::size_t inputs) {
+  if (auto hit = cache.find<QualityPiece>(key)) return hit;
+  DiskCache* disk = cache.disk();
+  if (!disk) return nullptr;
+  auto piece = std::make_shared<QualityPiece>();
+  if (!disk->find_part(CacheKind::QualityPiece, key,
+                       [&](std::string_view payload, std::string& why) { return decode_piece(payload, inputs, *piece, why); }))
+    return nullptr;
+  cache.insert<QualityPiece>(key, piece, piece_bytes(*piece));
+  return piece;
+}
+
 bool still_valid(const QualityPiece& piece, const QualityReuse& reuse) {
   for (const auto& [part, key] : piece.parts)
     if (reuse.part_key(part) != key) return false;
@@ -102,8 +174,9 @@ void improve_or_reuse(TriangleMesh&& in, std::span<const std::uint8_t> keep, std
     return;
   }
   const std::uint64_t key = hash_mix(piece_key(in, keep, crease, T, h, options), reuse->context);
+  const std::size_t inputs = in.positions.size();
   out = std::move(in);
-  if (const auto hit = reuse->cache->find<QualityPiece>(key); hit && still_valid(*hit, *reuse)) {
+  if (const auto hit = find_piece(*reuse->cache, key, inputs); hit && still_valid(*hit, *reuse)) {
     out = hit->mesh;
     origin = hit->origin;
     st = hit->stats;
@@ -118,8 +191,8 @@ void improve_or_reuse(TriangleMesh&& in, std::span<const std::uint8_t> keep, std
   improve_whole(out, keep, crease, recorded, T, h, options, st, origin);
   auto piece = std::make_shared<QualityPiece>(QualityPiece{out, origin, st, {}});
   if (!recorder.take(piece->parts)) return;
-  const std::size_t bytes = 128 + 24 * out.positions.size() + 12 * out.triangles.size() + 4 * origin.size() +
-                            16 * piece->parts.size();
+  if (DiskCache* disk = reuse->cache->disk()) disk->store_part(CacheKind::QualityPiece, key, encode_piece(*piece));
+  const std::size_t bytes = piece_bytes(*piece);
   reuse->cache->insert<QualityPiece>(key, std::move(piece), bytes);
 }
 

@@ -2,12 +2,16 @@
 // process the from-scratch mesh byte for byte, reusing every job; bad files (truncated,
 // corrupt, stale, misnamed, forged) are each ignored with one warning and the run's output stays
 // the same; writers at once (threads and processes) agree and leave no temporary files; trim()
-// keeps the least recently used last. The CLI's --cache end to end.
+// keeps the least recently used last. The parts of a global polygonization (bricks, quality
+// pieces, clean regions) reused by the next process after an edit, and checked when read. The
+// CLI's --cache end to end.
 #include "meshers/disk_cache.hpp"
 #include "meshers/mesh_plan.hpp"
 #include "meshers/node_cache.hpp"
 #include "meshers/polygonize.hpp"
 #include "runtime/builder.hpp"
+#include "runtime/scene.hpp"
+#include "tools/scenes.hpp"
 #include "tests/support/random_tree.hpp"
 
 #include <gtest/gtest.h>
@@ -254,7 +258,7 @@ TEST(DiskCache, ForgedEntriesWithAGoodChecksumAreCheckedAgainstTheirLength) {
   reseal_cache_entry(b);
   CacheEntryError error;
   EXPECT_FALSE(decode_cache_entry(b, 7, &error));
-  EXPECT_NE(error.detail.find("unknown strategy"), std::string::npos) << error.detail;
+  EXPECT_NE(error.detail.find("unknown enumerator"), std::string::npos) << error.detail;
   EXPECT_NE(forged(74, std::uint64_t(1) << 40).find("string bytes cannot fit"), std::string::npos);
 }
 
@@ -342,6 +346,98 @@ TEST(DiskCache, AFolderItCannotWriteToCostsAWarningNotTheRun) {
   fs::remove_all(dir);
 }
 
+// The snake of 60 curves, and the same with curve 30's first point moved by 0.01 in x: one
+// global job, most of whose bricks and pieces the edit does not reach.
+std::pair<Tree, Tree> snake_and_edit() {
+  const std::string text = scenes::snake_json(60, 1);
+  std::size_t at = 0;
+  for (int i = 0; i <= 30; ++i) at = text.find("\"points\": [[", at + 1);
+  at += 12;
+  char* end = nullptr;
+  const double x = std::strtod(text.c_str() + at, &end);
+  std::string moved = text;
+  moved.replace(at, std::size_t(end - (text.c_str() + at)), std::to_string(x + 0.01));
+  return {load_scene_text(text, "."), load_scene_text(moved, ".")};
+}
+
+const PolygonizeStats& global_job(const MeshResult& r) {
+  for (const NodeReport& e : r.nodes)
+    if (e.polygonize.bricks_active > 0) return e.polygonize;
+  ADD_FAILURE() << "no global job";
+  return r.nodes.front().polygonize;
+}
+
+// Every file of one kind ("-b.htc" bricks, "-q.htc" quality pieces, ".htc" alone: jobs).
+std::vector<fs::path> entries(const fs::path& dir, const std::string& kind) {
+  std::vector<fs::path> out;
+  for (const fs::path& f : files_in(dir, ".htc"))
+    if (kind == ".htc" ? f.filename().string().size() == 20 : f.filename().string().ends_with(kind)) out.push_back(f);
+  return out;
+}
+
+TEST(DiskCache, AnEditInsideAGlobalJobTakesItsUnchangedPartsFromDisk) {
+  const auto [before, after] = snake_and_edit();
+  const MeshResult scratch = mesh_tree(after, test::mesh_options(0.12));
+  const fs::path dir = test::temp_dir("disk-parts");
+  {
+    Process cold(dir);
+    cold.mesh(before);
+    EXPECT_GT(cold.disk.stats().part_written, 0u);
+  }
+  const std::size_t bricks = entries(dir, "-b.htc").size(), pieces = entries(dir, "-q.htc").size();
+  ASSERT_GT(bricks, 0u);
+  ASSERT_GT(pieces, 0u);
+  {
+    Process warm(dir);
+    const MeshResult r = warm.mesh(after);
+    EXPECT_TRUE(test::same_bytes(*scratch.mesh, *r.mesh));
+    EXPECT_EQ(reused(r), 0u) << "the job itself changed";
+    const PolygonizeStats& p = global_job(r);
+    EXPECT_GT(p.bricks_reused, p.bricks_active / 2);
+    EXPECT_LT(p.bricks_reused, p.bricks_active);
+    EXPECT_GT(p.quality.pieces_reused, 0u);
+    EXPECT_LT(p.quality.pieces_reused, p.quality.pieces);
+    const DiskCacheStats s = warm.disk.stats();
+    EXPECT_GE(s.part_hits, p.bricks_reused + p.quality.pieces_reused);
+    EXPECT_TRUE(warm.warnings.empty());
+  }
+  // Damaged parts: a flipped byte in a brick, a truncated piece, a brick whose triangle names a
+  // vertex past its own with a good checksum. Each is ignored with a warning and made again;
+  // the mesh stays the same. (The jobs' files go, or the job itself would be read.)
+  for (const fs::path& f : entries(dir, ".htc")) fs::remove(f);
+  const std::vector<fs::path> brick_files = entries(dir, "-b.htc");
+  std::string flipped = test::read_file(brick_files[0]);
+  flipped[flipped.size() - 5] = char(flipped[flipped.size() - 5] ^ 0x20);
+  test::write_file(brick_files[0], flipped);
+  const fs::path piece = entries(dir, "-q.htc")[0];
+  fs::resize_file(piece, fs::file_size(piece) / 2);
+  std::string forged = test::read_file(brick_files[1]);
+  std::uint64_t nv = 0, nn = 0, nt = 0;
+  std::memcpy(&nv, forged.data() + 49, 8);
+  std::memcpy(&nn, forged.data() + 57, 8);
+  std::memcpy(&nt, forged.data() + 65, 8);
+  ASSERT_GT(nt, 0u);
+  const std::uint32_t past = std::uint32_t(nv);
+  std::memcpy(forged.data() + 73 + 36 * nv + 16 * nn, &past, 4);
+  reseal_cache_entry(forged);
+  test::write_file(brick_files[1], forged);
+  Process damaged(dir);
+  const MeshResult r = damaged.mesh(after);
+  EXPECT_TRUE(test::same_bytes(*scratch.mesh, *r.mesh));
+  const DiskCacheStats s = damaged.disk.stats();
+  EXPECT_EQ(s.ignored[std::size_t(DiskIgnore::Checksum)], 1u);
+  EXPECT_EQ(s.ignored[std::size_t(DiskIgnore::Truncated)], 1u);
+  EXPECT_EQ(s.ignored[std::size_t(DiskIgnore::Contents)], 1u);
+  ASSERT_EQ(damaged.warnings.size(), 3u);
+  std::string all;
+  for (const std::string& w : damaged.warnings) all += w + "\n";
+  EXPECT_NE(all.find(brick_files[0].string() + ": checksum mismatch (corrupt); the brick is extracted again"), std::string::npos) << all;
+  EXPECT_NE(all.find(piece.string() + ": truncated"), std::string::npos) << all;
+  EXPECT_NE(all.find("names vertex " + std::to_string(nv) + " of " + std::to_string(nv)), std::string::npos) << all;
+  EXPECT_GT(global_job(r).bricks_reused, 0u);
+  fs::remove_all(dir);
+}
+
 // The CLI: --cache twice gives the same file and disk hits; a damaged file and two processes at once.
 const char* kScene = R"({"hybridtree": 1, "mesher": {"precision": 0.08}, "root": {"type": "union", "children": [
     {"type": "blend", "children": [{"type": "point", "center": [0,0,0], "radius": 0.8},
@@ -375,6 +471,7 @@ TEST(DiskCache, CliMeshTwiceGivesTheSameFileWithDiskHits) {
   EXPECT_EQ(second["cache"]["disk"]["written"], 0);
   EXPECT_EQ(second["cache"]["hits"], jobs);
   EXPECT_TRUE(second["cache"]["disk"]["ignored"].empty());
+  EXPECT_EQ(second["cache"]["disk"]["parts"]["written"], 0) << "the jobs were read whole: no part ran";
   // A truncated file: one warning line naming it, the same output, the count in the stats.
   const fs::path victim = files_in(cache, ".htc").front();
   fs::resize_file(victim, 20);
