@@ -16,6 +16,7 @@
 #include <cstring>
 #include <ctime>
 #include <random>
+#include <system_error>
 #include <type_traits>
 #include <vector>
 
@@ -387,11 +388,20 @@ void DiskCache::store(std::uint64_t key, const CachedJob& job) {
 
 void DiskCache::store_part(CacheKind kind, std::uint64_t key, std::string payload) {
   {
-    std::lock_guard lock(queue_mutex_);
-    if (queued_bytes_ + payload.size() <= kMaxQueuedBytes) {
+    std::unique_lock lock(queue_mutex_);
+    if (!writer_.joinable() && !no_writer_) {
+      try {
+        writer_ = std::thread([this] { write_queued(); });
+      } catch (const std::system_error&) {
+        no_writer_ = true;  // no thread to be had: the callers write
+      }
+    }
+    if (writer_.joinable()) {
+      // Past the bound the caller waits for room: writing itself could put a part on disk before
+      // an older one of its key still queued.
+      queue_room_.wait(lock, [&] { return queued_bytes_ == 0 || queued_bytes_ + payload.size() <= kMaxQueuedBytes; });
       queued_bytes_ += payload.size();
       queue_.push_back({kind, key, std::move(payload)});
-      if (!writer_.joinable()) writer_ = std::thread([this] { write_queued(); });
       queue_wake_.notify_one();
       return;
     }
@@ -414,10 +424,16 @@ void DiskCache::write_queued() {
     queue_.pop_front();
     writing_ = true;
     lock.unlock();
-    write_part(next.kind, next.key, next.payload);
+    try {
+      write_part(next.kind, next.key, next.payload);
+    } catch (...) {  // out of memory, or a warning callback that threw: the part is not kept
+      std::lock_guard counts(mutex_);
+      ++stats_.write_failures;
+    }
     lock.lock();
     queued_bytes_ -= next.payload.size();
     writing_ = false;
+    queue_room_.notify_all();
     if (queue_.empty()) queue_idle_.notify_all();
   }
 }
@@ -454,8 +470,10 @@ std::size_t DiskCache::trim() {
     if (::lstat(path.c_str(), &st) != 0 || !S_ISREG(st.st_mode)) continue;
     if (is_temporary_name(name) && now - seconds_of(st.st_mtim) > kStaleTemporarySeconds) ::unlink(path.c_str());
     if (!is_entry_name(name)) continue;
-    entries.push_back({path, std::uint64_t(st.st_size), seconds_of(st.st_mtim)});
-    total += std::uint64_t(st.st_size);
+    // Blocks held, not bytes: most parts are smaller than a block.
+    const std::uint64_t held = std::max<std::uint64_t>(std::uint64_t(st.st_blocks) * 512u, std::uint64_t(st.st_size));
+    entries.push_back({path, held, seconds_of(st.st_mtim)});
+    total += held;
   }
   std::sort(entries.begin(), entries.end(),
             [](const Entry& a, const Entry& b) { return a.mtime != b.mtime ? a.mtime < b.mtime : a.file < b.file; });

@@ -136,11 +136,14 @@ class DiskCache {
                  const std::function<bool(std::string_view payload, std::string& why)>& decode);
   /// Writes a part atomically, as store() does, but on a thread of its own while the caller goes
   /// on: a cold run of a fine polygonization writes hundreds of parts, which written in place
-  /// cost it about a fifth of its time. At most 256 MiB wait; past that the caller writes.
+  /// cost it about a fifth of its time. At most 256 MiB wait; past that the caller waits for
+  /// room. (Where no thread can be started, the caller writes.) So the warning callback may be
+  /// called from that thread until flush() returns.
   void store_part(CacheKind kind, std::uint64_t key, std::string payload);
   /// Waits until every part handed to store_part() is written (or failed).
   void flush();
-  /// Removes least-recently-used entry files until those left take at most max_bytes, and
+  /// Removes least-recently-used entry files until those left take at most max_bytes (the blocks
+  /// they hold), and
   /// temporary files older than an hour; returns the entry files removed. Flushes first.
   std::size_t trim();
 
@@ -170,7 +173,7 @@ class DiskCache {
   std::atomic<std::uint64_t> counter_{0};
   // The parts waiting to be written, and the thread that writes them (started on the first).
   std::mutex queue_mutex_;
-  std::condition_variable queue_wake_, queue_idle_;
+  std::condition_variable queue_wake_, queue_idle_, queue_room_;
   struct Queued {
     CacheKind kind;
     std::uint64_t key;
@@ -178,7 +181,7 @@ class DiskCache {
   };
   std::deque<Queued> queue_;
   std::size_t queued_bytes_ = 0;
-  bool writing_ = false, stopping_ = false;
+  bool writing_ = false, stopping_ = false, no_writer_ = false;
   std::thread writer_;
   void write_queued();
   void write_part(CacheKind kind, std::uint64_t key, std::string_view payload);

@@ -9,6 +9,7 @@
 #include <tbb/parallel_for.h>
 
 #include <algorithm>
+#include <cassert>
 #include <atomic>
 #include <bit>
 #include <cmath>
@@ -110,6 +111,8 @@ std::size_t kept_bytes(const KeptBrick& k) {
 
 namespace {
 
+static_assert(sizeof(EdgeVertex) == 56 && sizeof(KeptBrick) == 56, "store the new field in encode_kept and decode_kept");
+
 // A brick's extraction as a disk entry's payload: the flag and counts, the vertices' keys,
 // bricks and positions, the few nonzero normals (crease suspects) with their vertex, then the
 // triangles as indices into the vertices (their keys are among them). Field by field, no
@@ -130,6 +133,7 @@ std::string encode_kept(const KeptBrick& k) {
   for (const auto& t : k.out.triangles)
     for (const std::uint64_t key : t) {
       const std::uint32_t i = index(key);
+      assert(i < vs.size() && vs[i].key == key);  // a brick's triangles use its own vertices (place_vertices)
       w.bytes(&i, 4);
     }
   return std::move(w.out);

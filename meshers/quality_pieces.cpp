@@ -93,7 +93,8 @@ class PartRecorder {
 
 // A piece as a disk entry's payload (meshers/disk_cache.hpp): its mesh, origins, statistics and
 // the parts of the field it read with their keys.
-static_assert(sizeof(QualityStats) == 80, "store the new QualityStats field in encode_piece and decode_piece");
+static_assert(sizeof(QualityStats) == 80 && sizeof(QualityPiece) == 176,
+              "store the new QualityStats or QualityPiece field in encode_piece and decode_piece");
 template <class Io, class S>
 void stats_fields(Io& io, S& s) {
   io(s.collapses, s.flips, s.splits, s.moved, s.reverted, s.pieces, s.pieces_reused, s.retries, s.skipped, s.seconds);
@@ -137,8 +138,11 @@ bool decode_piece(std::string_view payload, std::size_t inputs, QualityPiece& p,
   for (std::size_t t = 0; in.error().empty() && t < nt; ++t)
     if (glm::any(glm::greaterThanEqual(p.mesh.triangles[t], glm::uvec3(std::uint32_t(nv)))))
       in.fail("triangle " + std::to_string(t) + " names a vertex past the " + std::to_string(nv));
-  for (std::size_t v = 0; in.error().empty() && v < nv; ++v)
+  for (std::size_t v = 0; in.error().empty() && v < nv; ++v) {
+    const glm::dvec3& x = p.mesh.positions[v];
+    if (!std::isfinite(x.x) || !std::isfinite(x.y) || !std::isfinite(x.z)) in.fail("vertex " + std::to_string(v) + " is not finite");
     if (p.origin[v] != ~0u && p.origin[v] >= inputs) in.fail("vertex " + std::to_string(v) + " comes from past the input");
+  }
   why = in.error();
   return why.empty();
 }
