@@ -240,9 +240,16 @@ class HYBRIDTREE_API Tree {
 ///
 /// Bounded: least-recently-used entries go first. Thread-safe: calls from several threads may
 /// share one session. Not cached: jobs that read an ffd's field.
+///
+/// With a folder, the cache has a second level on disk, shared by every session and process
+/// that names it, as `hybridtree mesh --cache DIR` (README, "On disk"): a job or part missing in
+/// memory is read from it, each new one written to it; bad or stale files are ignored with a
+/// warning on stderr; after each mesh() the folder is trimmed to `folder_bytes`.
 class HYBRIDTREE_API Session {
  public:
   explicit Session(std::size_t cache_bytes = std::size_t(1) << 30);
+  /// Throws InputError when `folder` cannot be made or is not a folder.
+  Session(std::size_t cache_bytes, const std::string& folder, std::uint64_t folder_bytes = std::uint64_t(1) << 30);
   /// As tree.mesh(options), reusing and filling the cache; stats.reused_nodes and
   /// stats.cache_misses say what was reused, and stats.json has "cache".
   Mesh mesh(const Tree& tree, const MeshOptions& options = {});
@@ -250,6 +257,7 @@ class HYBRIDTREE_API Session {
   /// polygonizations (bricks, quality-pass slabs and bands), within the bound given.
   std::size_t cache_bytes() const;
   std::size_t cache_entries() const;
+  /// Empties the memory level (not the folder).
   void clear();
 
   Session(const Session&) = delete;

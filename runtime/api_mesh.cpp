@@ -2,6 +2,7 @@
 // makes (meshers/mesh_run.hpp), its result as flat arrays, and meshers/mesh_io.hpp's writer.
 #include "runtime/api.hpp"
 
+#include "meshers/disk_cache.hpp"
 #include "meshers/mesh_io.hpp"
 #include "meshers/mesh_run.hpp"
 #include "meshers/node_cache.hpp"
@@ -76,7 +77,8 @@ Mesh mesh_with(const Tree::Impl& impl, const MeshOptions& options, ht::NodeCache
 }  // namespace
 
 struct Session::Impl {
-  explicit Impl(std::size_t bytes) : cache(bytes) {}
+  Impl(std::size_t bytes, std::unique_ptr<ht::DiskCache> folder) : disk(std::move(folder)), cache(bytes, disk.get()) {}
+  std::unique_ptr<ht::DiskCache> disk;  // before the cache, which holds it
   ht::NodeCache cache;
 };
 
@@ -84,7 +86,20 @@ Mesh Tree::mesh(const MeshOptions& options) const { return mesh_with(*impl_, opt
 
 Mesh Session::mesh(const Tree& tree, const MeshOptions& options) { return mesh_with(*tree.impl_, options, &impl_->cache); }
 
-Session::Session(std::size_t cache_bytes) : impl_(std::make_unique<Impl>(cache_bytes)) {}
+Session::Session(std::size_t cache_bytes) : impl_(std::make_unique<Impl>(cache_bytes, nullptr)) {}
+
+namespace {
+std::unique_ptr<ht::DiskCache> open_folder(const std::string& folder, std::uint64_t bytes) {
+  try {
+    return std::make_unique<ht::DiskCache>(folder, bytes);
+  } catch (const ht::DiskCacheError& e) {
+    throw InputError(e.what(), folder);
+  }
+}
+}  // namespace
+
+Session::Session(std::size_t cache_bytes, const std::string& folder, std::uint64_t folder_bytes)
+    : impl_(std::make_unique<Impl>(cache_bytes, open_folder(folder, folder_bytes))) {}
 Session::~Session() = default;
 std::size_t Session::cache_bytes() const { return impl_->cache.stats().bytes + impl_->cache.pieces().stats().bytes; }
 std::size_t Session::cache_entries() const {

@@ -8,9 +8,11 @@
 #include "tools/scenes.hpp"
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include <atomic>
 #include <cstring>
+#include <filesystem>
 #include <random>
 #include <thread>
 #include <vector>
@@ -184,4 +186,41 @@ TEST(Api, SessionReusesUnchangedJobsAndGivesTheSameMesh) {
   EXPECT_EQ(std::memcmp(again.vertices.data(), scratch.vertices.data(), 8 * again.vertices.size()), 0);
   EXPECT_NE(again.stats.json.find("\"cache\""), std::string::npos);
   EXPECT_GT(session.cache_entries(), 0u);
+}
+
+TEST(Api, SessionsOverOneFolderShareTheirResultsAcrossSessions) {
+  // Two sessions over one folder, as two processes would be: the second takes every job of the
+  // first from disk, and an edit inside the snake's global job takes its unchanged bricks.
+  const std::filesystem::path dir = ht::test::temp_dir("api_folder");
+  const std::string text = ht::scenes::snake_json(40, 3);
+  std::size_t at = 0;
+  for (int i = 0; i <= 20; ++i) at = text.find("\"points\": [[", at + 1);
+  std::string moved = text;  // curve 20's first point moved by 0.01 in x
+  {
+    char* end = nullptr;
+    const double x = std::strtod(text.c_str() + at + 12, &end);
+    moved.replace(at + 12, std::size_t(end - (text.c_str() + at + 12)), std::to_string(x + 0.01));
+  }
+  const hybridtree::Tree before = hybridtree::Tree::from_json(text), after = hybridtree::Tree::from_json(moved);
+  hybridtree::MeshOptions o;
+  o.precision = 0.2;
+  {
+    hybridtree::Session first(64u << 20, (dir / "cache").string());
+    EXPECT_TRUE(first.mesh(before, o).stats.reused_nodes.empty());
+  }
+  hybridtree::Session second(64u << 20, (dir / "cache").string());
+  const hybridtree::Mesh same = second.mesh(before, o);
+  EXPECT_EQ(same.stats.cache_misses, 0u);
+  EXPECT_FALSE(same.stats.reused_nodes.empty());
+  hybridtree::Session third(64u << 20, (dir / "cache").string());
+  const hybridtree::Mesh edited = third.mesh(after, o);
+  const hybridtree::Mesh scratch = after.mesh(o);
+  EXPECT_EQ(edited.triangles, scratch.triangles);
+  ASSERT_EQ(edited.vertices.size(), scratch.vertices.size());
+  EXPECT_EQ(std::memcmp(edited.vertices.data(), scratch.vertices.data(), 8 * edited.vertices.size()), 0);
+  const auto json = nlohmann::json::parse(edited.stats.json);
+  EXPECT_GT(json["cache"]["disk"]["parts"]["hits"].get<int>(), 0) << json["cache"].dump();
+  ht::test::write_file(dir / "a_file", "x");
+  EXPECT_THROW(hybridtree::Session(1u << 20, (dir / "a_file").string()), hybridtree::InputError);
+  std::filesystem::remove_all(dir);
 }

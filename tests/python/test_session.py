@@ -1,5 +1,6 @@
 """hybridtree.Session: meshing an edited tree reuses the unchanged jobs and gives Tree.mesh's bytes."""
 import numpy as np
+import pytest
 
 import hybridtree
 
@@ -27,3 +28,18 @@ def test_an_edit_reuses_the_unchanged_subtree_and_matches_from_scratch():
     assert session.cache_entries > 0 and session.cache_bytes > 0
     session.clear()
     assert session.cache_entries == 0
+
+
+def test_a_folder_shares_results_across_sessions(tmp_path):
+    folder = tmp_path / "cache"
+    first = hybridtree.Session(64 << 20, folder=str(folder))
+    v0, t0, _ = first.mesh(two_segments(0.5), precision=0.05)
+    del first
+    second = hybridtree.Session(64 << 20, folder=str(folder), folder_bytes=64 << 20)
+    v, t, stats = second.mesh(two_segments(0.5), precision=0.05)
+    assert stats["cache"]["misses"] == 0
+    assert stats["cache"]["disk"]["hits"] == stats["cache"]["hits"] > 0
+    assert v.tobytes() == v0.tobytes() and np.array_equal(t, t0)
+    (tmp_path / "a_file").write_text("x")
+    with pytest.raises(hybridtree.InputError):
+        hybridtree.Session(folder=str(tmp_path / "a_file"))

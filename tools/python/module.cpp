@@ -12,6 +12,7 @@
 #include <atomic>
 #include <exception>
 #include <mutex>
+#include <optional>
 
 namespace py = pybind11;
 using namespace hybridtree;
@@ -185,14 +186,21 @@ void bind_session(py::module_& m) {
   py::class_<Session>(m, "Session",
                       "Keeps node results across mesh calls (bounded, LRU): re-meshing an edited tree runs only "
                       "the jobs whose subtree changed; the mesh is the same as Tree.mesh's. Thread-safe.")
-      .def(py::init<std::size_t>(), py::arg("cache_bytes") = std::size_t(1) << 30)
+      .def(py::init([](std::size_t cache_bytes, std::optional<std::string> folder, std::uint64_t folder_bytes) {
+             return folder ? std::make_unique<Session>(cache_bytes, *folder, folder_bytes)
+                           : std::make_unique<Session>(cache_bytes);
+           }),
+           py::arg("cache_bytes") = std::size_t(1) << 30, py::kw_only(), py::arg("folder") = py::none(),
+           py::arg("folder_bytes") = std::uint64_t(1) << 30,
+           "folder: a cache folder on disk as `hybridtree mesh --cache` keeps, shared with other sessions and "
+           "processes (made if missing); folder_bytes bounds it after each mesh")
       .def("mesh", &session_mesh, py::arg("tree"), py::kw_only(), py::arg("precision") = 0.0,
            py::arg("strategy") = "scene", py::arg("threads") = 0, py::arg("memory_budget_gib") = 4.0,
            py::arg("sharp_features") = true, py::arg("quality") = true, py::arg("progress") = py::none(),
            "As Tree.mesh, with the session's cache; statistics[\"cache\"] has hits, misses, reused_nodes")
       .def_property_readonly("cache_bytes", &Session::cache_bytes, "bytes the cache holds now")
       .def_property_readonly("cache_entries", &Session::cache_entries, "entries the cache holds now")
-      .def("clear", &Session::clear, "Empty the cache");
+      .def("clear", &Session::clear, "Empty the cache in memory (not the folder)");
 }
 
 }  // namespace
