@@ -18,8 +18,7 @@
 //                      polygonizer's and the local strategy's statistics, edges split,
 //                      refinements): numbers 8 bytes, flags and enums 1 byte, strings as u64
 //                      length + bytes, lists as u64 count + items
-//   payload (a part)   what its owner writes (meshers/polygonize_reuse.cpp, quality_pieces.cpp),
-//                      with meshers/cache_bytes.hpp, and checks when it reads it back
+//   payload (a part)   meshers/cache_parts.hpp's encoding, checked when read back
 //
 // Writes are atomic: each goes to a temporary file of its own in DIR (".tmp-PID-N-RANDOM.partial",
 // O_EXCL) and is renamed over the final name, so a reader sees the old file, the new one or none,

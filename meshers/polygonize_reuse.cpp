@@ -1,6 +1,6 @@
 #include "meshers/polygonize_reuse.hpp"
 
-#include "meshers/cache_bytes.hpp"
+#include "meshers/cache_parts.hpp"
 #include "meshers/disk_cache.hpp"
 #include "meshers/piece_cache.hpp"
 #include "meshers/self_intersections.hpp"
@@ -110,73 +110,6 @@ std::size_t kept_bytes(const KeptBrick& k) {
 }
 
 namespace {
-
-static_assert(sizeof(EdgeVertex) == 56 && sizeof(KeptBrick) == 56, "store the new field in encode_kept and decode_kept");
-
-// A brick's extraction as a disk entry's payload: the flag and counts, the vertices' keys,
-// bricks and positions, the few nonzero normals (crease suspects) with their vertex, then the
-// triangles as indices into the vertices (their keys are among them). Field by field, no
-// padding bytes: two writers of one key write the same bytes.
-std::string encode_kept(const KeptBrick& k) {
-  const std::vector<EdgeVertex>& vs = k.out.vertices;
-  std::vector<std::uint32_t> with_normal;
-  for (std::uint32_t v = 0; v < vs.size(); ++v)
-    if (vs[v].normal != glm::vec3(0.0f)) with_normal.push_back(v);
-  CacheWriter w;
-  w(k.reaches_boundary, vs.size(), with_normal.size(), k.out.triangles.size());
-  for (const EdgeVertex& v : vs) w.bytes(&v.key, 8), w.bytes(&v.brick, 4), w.bytes(&v.position, sizeof v.position);
-  for (const std::uint32_t v : with_normal) w.bytes(&v, 4), w.bytes(&vs[v].normal, sizeof vs[v].normal);
-  auto index = [&](std::uint64_t key) {
-    return std::uint32_t(std::lower_bound(vs.begin(), vs.end(), key, [](const EdgeVertex& e, std::uint64_t x) { return e.key < x; }) -
-                         vs.begin());
-  };
-  for (const auto& t : k.out.triangles)
-    for (const std::uint64_t key : t) {
-      const std::uint32_t i = index(key);
-      assert(i < vs.size() && vs[i].key == key);  // a brick's triangles use its own vertices (place_vertices)
-      w.bytes(&i, 4);
-    }
-  return std::move(w.out);
-}
-
-// What encode_kept wrote, checked: the join looks each triangle's keys up among its brick's
-// vertices, so the keys must be strictly increasing and every index within the vertices.
-bool decode_kept(std::string_view payload, KeptBrick& k, std::string& why) {
-  CacheReader in(payload);
-  std::size_t nv = 0, nn = 0, nt = 0;
-  in(k.reaches_boundary, nv, nn, nt);
-  std::vector<EdgeVertex>& vs = k.out.vertices;
-  if (in.fits(nv, 8 + 4 + sizeof(glm::dvec3), "vertices")) {
-    vs.resize(nv);
-    for (EdgeVertex& v : vs) in.bytes(&v.key, 8), in.bytes(&v.brick, 4), in.bytes(&v.position, sizeof v.position);
-  }
-  if (in.error().empty() && in.fits(nn, 4 + sizeof(glm::vec3), "normals"))
-    for (std::size_t i = 0; i < nn && in.error().empty(); ++i) {
-      std::uint32_t v = 0;
-      in.bytes(&v, 4);
-      if (v >= nv) in.fail("a normal of vertex " + std::to_string(v) + " of " + std::to_string(nv));
-      else in.bytes(&vs[v].normal, sizeof(glm::vec3));
-    }
-  if (in.error().empty() && in.fits(nt, 12, "triangles")) {
-    k.out.triangles.resize(nt);
-    for (std::size_t t = 0; t < nt && in.error().empty(); ++t)
-      for (std::uint64_t& key : k.out.triangles[t]) {
-        std::uint32_t i = 0;
-        in.bytes(&i, 4);
-        if (i >= nv) in.fail("triangle " + std::to_string(t) + " names vertex " + std::to_string(i) + " of " + std::to_string(nv));
-        else key = vs[i].key;
-      }
-  }
-  if (in.error().empty() && in.remaining()) in.fail(std::to_string(in.remaining()) + " bytes after the triangles");
-  for (std::size_t i = 0; in.error().empty() && i < vs.size(); ++i) {
-    if (i && !(vs[i - 1].key < vs[i].key)) in.fail("vertex keys out of order at " + std::to_string(i));
-    if (vs[i].brick >= (1u << 31) || !std::isfinite(vs[i].position.x) || !std::isfinite(vs[i].position.y) ||
-        !std::isfinite(vs[i].position.z))
-      in.fail("vertex " + std::to_string(i) + " out of range");
-  }
-  why = in.error();
-  return why.empty();
-}
 
 // A region's triangles as a mesh of their own: vertices numbered in increasing global order.
 TriangleMesh region_mesh(const TriangleMesh& mesh, const std::vector<std::uint32_t>& triangles) {

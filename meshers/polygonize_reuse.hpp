@@ -12,9 +12,8 @@
 // a piece is taken again when the bricks it evaluated the field in still have the same tapes.
 //
 // With a disk level (`hybridtree mesh --cache DIR`), kept bricks and clean regions are files of
-// DIR too (meshers/disk_cache.hpp): one per brick, its vertices (edge key, brick, position,
-// normal) and triangles (three edge keys), checked when read back (keys strictly increasing,
-// every triangle's keys among the vertices, positions finite).
+// DIR too (meshers/disk_cache.hpp), one per brick (meshers/cache_parts.hpp encode_kept), checked
+// when read back.
 #pragma once
 
 #include "meshers/brick_extract.hpp"

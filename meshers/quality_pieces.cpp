@@ -3,7 +3,7 @@
 // from a PieceCache when its input and field were seen before.
 #include "meshers/quality.hpp"
 
-#include "meshers/cache_bytes.hpp"
+#include "meshers/cache_parts.hpp"
 #include "meshers/disk_cache.hpp"
 #include "meshers/piece_cache.hpp"
 #include "meshers/quality_whole.hpp"
@@ -32,15 +32,6 @@ namespace {
 constexpr int kBandRings = 3;             // rings around the triangles between slabs, reworked after
 constexpr double kSmallComponentCells = 2.0;  // components smaller than this many h across stay as they are
 constexpr std::uint64_t kPieceVersion = 1;  // of what a cached piece holds and how its key is made
-
-// A slab's or band's result, as a PieceCache keeps it, with the parts of the field its work
-// read and their keys then.
-struct QualityPiece {
-  TriangleMesh mesh;
-  std::vector<std::uint32_t> origin;  // per vertex: its index in the piece's input, ~0u for a new one
-  QualityStats stats;
-  std::vector<std::pair<std::uint64_t, std::uint64_t>> parts;  // (part, key), by part
-};
 
 // The bytes a piece is charged in the cache.
 std::size_t piece_bytes(const QualityPiece& p) {
@@ -90,62 +81,6 @@ class PartRecorder {
   std::mutex mutex_;
   std::vector<std::uint64_t> parts_;
 };
-
-// A piece as a disk entry's payload (meshers/disk_cache.hpp): its mesh, origins, statistics and
-// the parts of the field it read with their keys.
-static_assert(sizeof(QualityStats) == 80 && sizeof(QualityPiece) == 176,
-              "store the new QualityStats or QualityPiece field in encode_piece and decode_piece");
-template <class Io, class S>
-void stats_fields(Io& io, S& s) {
-  io(s.collapses, s.flips, s.splits, s.moved, s.reverted, s.pieces, s.pieces_reused, s.retries, s.skipped, s.seconds);
-}
-
-std::string encode_piece(const QualityPiece& p) {
-  CacheWriter w;
-  w(p.mesh.positions.size(), p.mesh.triangles.size(), p.parts.size());
-  w.bytes(p.mesh.positions.data(), p.mesh.positions.size() * sizeof(glm::dvec3));
-  w.bytes(p.mesh.triangles.data(), p.mesh.triangles.size() * sizeof(glm::uvec3));
-  w.bytes(p.origin.data(), p.origin.size() * sizeof(std::uint32_t));
-  w.bytes(p.parts.data(), p.parts.size() * sizeof(p.parts[0]));
-  stats_fields(w, p.stats);
-  return std::move(w.out);
-}
-
-// What encode_piece wrote, checked against the piece's input (`inputs` vertices): indices within
-// the mesh, origins within the input or new (~0u).
-bool decode_piece(std::string_view payload, std::size_t inputs, QualityPiece& p, std::string& why) {
-  CacheReader in(payload);
-  std::size_t nv = 0, nt = 0, np = 0;
-  in(nv, nt, np);
-  if (in.fits(nv, sizeof(glm::dvec3) + 4, "vertices")) {
-    p.mesh.positions.resize(nv);
-    in.bytes(p.mesh.positions.data(), nv * sizeof(glm::dvec3));
-  }
-  if (in.error().empty() && in.fits(nt, sizeof(glm::uvec3), "triangles")) {
-    p.mesh.triangles.resize(nt);
-    in.bytes(p.mesh.triangles.data(), nt * sizeof(glm::uvec3));
-  }
-  if (in.error().empty()) {
-    p.origin.resize(nv);
-    in.bytes(p.origin.data(), nv * sizeof(std::uint32_t));
-  }
-  if (in.error().empty() && in.fits(np, sizeof(p.parts[0]), "parts")) {
-    p.parts.resize(np);
-    in.bytes(p.parts.data(), np * sizeof(p.parts[0]));
-  }
-  stats_fields(in, p.stats);
-  if (in.error().empty() && in.remaining()) in.fail(std::to_string(in.remaining()) + " bytes after the statistics");
-  for (std::size_t t = 0; in.error().empty() && t < nt; ++t)
-    if (glm::any(glm::greaterThanEqual(p.mesh.triangles[t], glm::uvec3(std::uint32_t(nv)))))
-      in.fail("triangle " + std::to_string(t) + " names a vertex past the " + std::to_string(nv));
-  for (std::size_t v = 0; in.error().empty() && v < nv; ++v) {
-    const glm::dvec3& x = p.mesh.positions[v];
-    if (!std::isfinite(x.x) || !std::isfinite(x.y) || !std::isfinite(x.z)) in.fail("vertex " + std::to_string(v) + " is not finite");
-    if (p.origin[v] != ~0u && p.origin[v] >= inputs) in.fail("vertex " + std::to_string(v) + " comes from past the input");
-  }
-  why = in.error();
-  return why.empty();
-}
 
 // The piece under `key`: from memory, else from the disk level (then in memory too), else null.
 std::shared_ptr<const QualityPiece> find_piece(PieceCache& cache, std::uint64_t key, std::size_t inputs) {

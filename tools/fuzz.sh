@@ -2,7 +2,7 @@
 # Builds the libFuzzer targets in build-fuzz/ (clang, -DHYBRIDTREE_FUZZ=ON: AddressSanitizer,
 # UndefinedBehaviorSanitizer, coverage) and runs each for SECONDS (default 60), one after the
 # other, on one core, starting from its committed corpus in fuzz/corpus/<name>/.
-#   bash tools/fuzz.sh [SECONDS] [NAME...]       NAME: scene mesh_off mesh_obj mesh_ply mesh_stl cache_entry
+#   bash tools/fuzz.sh [SECONDS] [NAME...]       NAME: scene mesh_off mesh_obj mesh_ply mesh_stl cache_entry cache_part
 # New inputs go to build-fuzz/corpus/<name>/ (not committed); a finding stops its target and
 # leaves crash-*, leak-*, timeout-* or oom-* in build-fuzz/findings/. To keep a finding as a
 # regression input, minimize it (build-fuzz/bin/fuzz_<name> -minimize_crash=1 -runs=10000 FILE)
@@ -12,7 +12,7 @@ cd "$(dirname "$0")/.."
 seconds=${1:-60}
 shift || true
 names=("$@")
-[ ${#names[@]} -gt 0 ] || names=(scene mesh_off mesh_obj mesh_ply mesh_stl cache_entry)
+[ ${#names[@]} -gt 0 ] || names=(scene mesh_off mesh_obj mesh_ply mesh_stl cache_entry cache_part)
 
 CC=clang CXX=clang++ cmake -S . -B build-fuzz -DCMAKE_BUILD_TYPE=RelWithDebInfo -DHYBRIDTREE_FUZZ=ON \
   -DHYBRIDTREE_TESTS=OFF -DHYBRIDTREE_BENCH=OFF
