@@ -61,7 +61,7 @@ std::size_t Improver::split() {
   return done;
 }
 
-double Improver::after_collapse(HH h, bool tiny) const {
+double Improver::after_collapse(HH h, bool tiny, bool to_ring) const {
   const VH from = m_.from_vertex_handle(h), to = m_.to_vertex_handle(h);
   const glm::dvec3 target = p(to), ref = ring_normal(from);
   double worst = -1.0;
@@ -75,7 +75,7 @@ double Improver::after_collapse(HH h, bool tiny) const {
     const double thin = thinness(q[0], q[1], q[2]), was = thinness(a, b, d);
     // No face gets degenerate (unless it was as thin already: a cluster's needles).
     if (thin > kDegenerateCos && thin > was) return 2.0;
-    if (glm::dot(ref, n) < kTurnCos && !(tiny && thin > kNeedleCos)) return 2.0;
+    if (to_ring && glm::dot(ref, n) < kTurnCos && !(tiny && thin > kNeedleCos)) return 2.0;
     // A face with a shape of its own keeps its plane: beside a crease, a face may not swing
     // over to the other sheet.
     if (was < kNeedleCos && glm::dot(unit_normal(a, b, d), n) < kKeepPlaneCos) return 2.0;

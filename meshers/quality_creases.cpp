@@ -86,7 +86,10 @@ std::size_t Improver::even_chains(QualityStats& st) {
     if (std::min(la, lb) < kChainMergeCells * h_) {
       const VH into = la < lb ? a : b;
       const HH x = m_.find_halfedge(v, into);
-      if (x.is_valid() && ht::collapse_ok(m_, x) && keeps_faces(x) && after_collapse(x, false) <= ring_thinness(v) && surface_kept(x)) {
+      // A crease point's ring spans both sheets, so its mean normal says nothing of a face's
+      // turn: keeps_faces holds each face to its own normal instead.
+      if (x.is_valid() && ht::collapse_ok(m_, x) && keeps_faces(x) && after_collapse(x, false, false) <= ring_thinness(v) &&
+          surface_kept(x)) {
         ht::collapse(m_, x);
         ++done;
         continue;

@@ -151,7 +151,7 @@ class Improver {
   // nothing, so faces are held to the ring's area-weighted normal, which the well-shaped faces
   // dominate; with `tiny` (the edge is a speck: vertices a thousandth of a cell apart, around a
   // grid point the surface passes through) needles are not held to it at all.
-  double after_collapse(HH h, bool tiny) const;
+  double after_collapse(HH h, bool tiny, bool to_ring = true) const;
 
   // Collapsing h beside a crease takes no face's middle further off the surface.
   bool surface_kept(HH h);

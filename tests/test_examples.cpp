@@ -56,10 +56,11 @@ TEST(Examples, EveryExampleMeshesClosedOnItsSurface) {
     // 0.45 (meshers/local_parts.hpp kCreaseWeldFraction) 11.22, with the snap at 0.15 at creases
     // (kCreaseCutSnap) 14.28 and the smallest 1.63 (0.47 before both); with the band around
     // each seam through the quality pass, the seam's points evened along it
-    // (meshers/local_booleans.cpp polish_seam), 24.43 and 6.79.
+    // (meshers/local_booleans.cpp polish_seam), 24.43 and 6.79; with the seam's points merged
+    // along it whatever the mean normal of their two-sheet ring, 28.26 and 7.80.
     if (file.filename() == "carved_box.json") {
-      EXPECT_GT(c.made_min_angle_p1, 22.0);
-      EXPECT_GT(c.made_min_angle, 5.0);
+      EXPECT_GT(c.made_min_angle_p1, 26.5);
+      EXPECT_GT(c.made_min_angle, 6.5);
     }
     EXPECT_LT(c.vertex_error_max, 0.1 * h);
   }
