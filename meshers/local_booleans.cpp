@@ -82,13 +82,17 @@ TriangleMesh boolean_step(const LocalInput& in, NodeKind kind, BooleanOperand& a
   // edge of it collapses (a seam point only into another), or its corners off the seam relax.
   unfold_folded(out, seam, gradient_of(node_field), T, false);
   // The seam's band through the quality pass, unless the seams are to be left as stitched
-  // (LocalInput::remesh_seams) or the pass is off; where polishing made two triangles cross (its
-  // steps are local), the stitched band stays.
+  // (LocalInput::remesh_seams) or the pass is off; where polishing made two triangles cross
+  // (its steps are local), or folded a triangle over a neighbour (crossing nothing: a merge on
+  // a knife-edge seam is held to each face's own normal, not to the other sheet), the stitched
+  // band stays.
   if (in.remesh_seams && in.polygonize.quality.enabled && st.self_intersections == 0) {
     TriangleMesh stitched = out;
     std::vector<std::uint8_t> stitched_seam = seam;
+    const std::size_t folds = folded_triangles(out, gradient_of(node_field)).size();
     polish_seam(out, seam, node_field, T, in.precision);
-    if (!intersections_in(out, near).empty()) out = std::move(stitched), seam = std::move(stitched_seam);
+    if (!intersections_in(out, near).empty() || folded_triangles(out, gradient_of(node_field)).size() > folds)
+      out = std::move(stitched), seam = std::move(stitched_seam);
   }
   return out;
 }

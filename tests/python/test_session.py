@@ -35,7 +35,7 @@ def test_a_folder_shares_results_across_sessions(tmp_path):
     first = hybridtree.Session(64 << 20, folder=str(folder))
     v0, t0, _ = first.mesh(two_segments(0.5), precision=0.05)
     del first
-    second = hybridtree.Session(64 << 20, folder=str(folder), folder_bytes=64 << 20)
+    second = hybridtree.Session(64 << 20, folder=folder, folder_bytes=64 << 20)  # a pathlib.Path
     v, t, stats = second.mesh(two_segments(0.5), precision=0.05)
     assert stats["cache"]["misses"] == 0
     assert stats["cache"]["disk"]["hits"] == stats["cache"]["hits"] > 0

@@ -12,7 +12,6 @@
 #include <atomic>
 #include <exception>
 #include <mutex>
-#include <optional>
 
 namespace py = pybind11;
 using namespace hybridtree;
@@ -186,9 +185,11 @@ void bind_session(py::module_& m) {
   py::class_<Session>(m, "Session",
                       "Keeps node results across mesh calls (bounded, LRU): re-meshing an edited tree runs only "
                       "the jobs whose subtree changed; the mesh is the same as Tree.mesh's. Thread-safe.")
-      .def(py::init([](std::size_t cache_bytes, std::optional<std::string> folder, std::uint64_t folder_bytes) {
-             return folder ? std::make_unique<Session>(cache_bytes, *folder, folder_bytes)
-                           : std::make_unique<Session>(cache_bytes);
+      .def(py::init([](std::size_t cache_bytes, const py::object& folder, std::uint64_t folder_bytes) {
+             if (folder.is_none()) return std::make_unique<Session>(cache_bytes);
+             // str, bytes or any os.PathLike (pathlib.Path)
+             const py::object path = py::module_::import("os").attr("fsdecode")(folder);
+             return std::make_unique<Session>(cache_bytes, path.cast<std::string>(), folder_bytes);
            }),
            py::arg("cache_bytes") = std::size_t(1) << 30, py::kw_only(), py::arg("folder") = py::none(),
            py::arg("folder_bytes") = std::uint64_t(1) << 30,
