@@ -1,6 +1,8 @@
 // Parts of global polygonizations kept across runs (meshers/piece_cache.hpp, issue 15): bricks
 // and quality-pass slabs and bands. After edits, a polygonization that takes its unchanged parts
-// from the cache gives the from-scratch mesh byte for byte, and does take them.
+// from the cache, in memory or from files, gives the from-scratch mesh byte for byte, and does
+// take them.
+#include "meshers/disk_cache.hpp"
 #include "meshers/mesh_plan.hpp"
 #include "meshers/node_cache.hpp"
 #include "meshers/piece_cache.hpp"
@@ -91,16 +93,21 @@ TEST(PieceCache, FindsOnlyTheTypeStoredAndEvictsTheOldest) {
   EXPECT_EQ(cache.find<int>(4), nullptr);
 }
 
+// Random tree `seed` blended with a point beside it, and the point's id: the edits move it.
+std::pair<Tree, NodeId> tree_and_point(int seed) {
+  test::Rng rng(900 + seed);
+  test::RandomTreeOptions o;
+  o.max_depth = 3;
+  Builder b(kT);
+  const NodeId x = test::random_tree(b, rng, o);
+  const NodeId y = b.point(dvec3(3.0 + 0.1 * seed, 0.2, -0.1), {0.6, 1.0});
+  return {b.build(b.blend({x, y})), y};
+}
+
 TEST(PieceReuse, NudgedRandomTreesReuseBricksAndGiveTheSameBytes) {
   std::size_t compared = 0, with_bricks = 0;
   for (int seed = 0; seed < 16; ++seed) {
-    test::Rng ra(900 + seed), rb(950 + seed);
-    test::RandomTreeOptions o;
-    o.max_depth = 3;
-    Builder b(kT);
-    const NodeId x = test::random_tree(b, ra, o);
-    const NodeId y = b.point(dvec3(3.0 + 0.1 * seed, 0.2, -0.1), {0.6, 1.0});
-    const Tree before = b.build(b.blend({x, y}));
+    const auto [before, y] = tree_and_point(seed);
     const Reuse r = check_edit(before, nudged(before, y, 0, 0.05), 0.1);
     compared += r.active > 0;
     with_bricks += r.bricks > 0;
@@ -108,6 +115,46 @@ TEST(PieceReuse, NudgedRandomTreesReuseBricksAndGiveTheSameBytes) {
   }
   EXPECT_GE(compared, 8u);
   EXPECT_GE(with_bricks, compared / 2) << "bricks far from the edit were hardly ever reused";
+}
+
+// check_edit through the disk level (`hybridtree mesh --cache DIR`): `before` meshed by one
+// process's caches over `dir`, `after` by a fresh one's, as two runs of the CLI would. No file may
+// be ignored.
+Reuse check_edit_on_disk(const Tree& before, const Tree& after, double h, const std::filesystem::path& dir) {
+  std::vector<std::string> warnings;
+  auto warn = [&](const std::string& line) { warnings.push_back(line); };
+  {
+    DiskCache disk(dir, std::uint64_t(1) << 30, warn);
+    NodeCache cache(std::size_t(1) << 30, &disk);
+    if (!try_mesh(before, &cache, h)) return {};
+  }
+  const auto scratch = try_mesh(after, nullptr, h);
+  DiskCache disk(dir, std::uint64_t(1) << 30, warn);
+  NodeCache cache(std::size_t(1) << 30, &disk);
+  const auto incremental = try_mesh(after, &cache, h);
+  disk.flush();
+  EXPECT_EQ(scratch.has_value(), incremental.has_value());
+  EXPECT_TRUE(warnings.empty()) << warnings.front();
+  if (!scratch || !incremental) return {};
+  EXPECT_TRUE(test::same_bytes(*scratch->mesh, *incremental->mesh));
+  const Reuse r = reuse_of(*incremental);
+  EXPECT_GE(disk.stats().part_hits, r.bricks + r.pieces_reused) << "every part reused came from a file";
+  return r;
+}
+
+TEST(PieceReuse, NudgedRandomTreesThroughTheDiskGiveTheSameBytes) {
+  std::size_t compared = 0, with_bricks = 0;
+  for (int seed = 0; seed < 8; ++seed) {
+    const auto [before, y] = tree_and_point(seed);
+    const std::filesystem::path dir = test::temp_dir("parts-disk-" + std::to_string(seed));
+    const Reuse r = check_edit_on_disk(before, nudged(before, y, 0, 0.05), 0.1, dir);
+    std::filesystem::remove_all(dir);
+    compared += r.active > 0;
+    with_bricks += r.bricks > 0;
+    EXPECT_LT(r.bricks, r.active);
+  }
+  EXPECT_GE(compared, 4u);
+  EXPECT_GE(with_bricks, compared / 2) << "bricks far from the edit were hardly ever read back";
 }
 
 // The snake of `count` curves as JSON, and with curve `which`'s first point moved by `dx` in x.
