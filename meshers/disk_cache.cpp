@@ -249,20 +249,30 @@ std::optional<std::string_view> open_cache_entry(std::string_view bytes, CacheKi
   return bytes.substr(kHeaderBytes);
 }
 
+namespace {
+
+// A job's payload: its mesh and report, checked; false with why.
+bool decode_job(std::string_view payload, CachedJob& job, std::string& why) {
+  CacheReader in(payload);
+  auto mesh = std::make_shared<TriangleMesh>();
+  if (read_mesh(in, *mesh)) report_fields(in, job.report);
+  if (in.error().empty() && in.remaining()) in.fail(std::to_string(in.remaining()) + " bytes after the report");
+  why = in.error();
+  if (!why.empty()) return false;
+  job.mesh = std::move(mesh);
+  return true;
+}
+
+}  // namespace
+
 std::optional<CachedJob> decode_cache_entry(std::string_view bytes, std::uint64_t key, CacheEntryError* error) {
   const std::optional<std::string_view> payload = open_cache_entry(bytes, CacheKind::Job, key, error);
   if (!payload) return std::nullopt;
-  CacheReader in(*payload);
-  auto mesh = std::make_shared<TriangleMesh>();
   CachedJob job;
-  if (read_mesh(in, *mesh)) report_fields(in, job.report);
-  if (in.error().empty() && in.remaining()) in.fail(std::to_string(in.remaining()) + " bytes after the report");
-  if (!in.error().empty()) {
-    if (error) *error = CacheEntryError{DiskIgnore::Contents, "bad contents: " + in.error()};
-    return std::nullopt;
-  }
-  job.mesh = std::move(mesh);
-  return job;
+  std::string why;
+  if (decode_job(*payload, job, why)) return job;
+  if (error) *error = CacheEntryError{DiskIgnore::Contents, "bad contents: " + why};
+  return std::nullopt;
 }
 
 std::size_t DiskCacheStats::ignored_total() const {
@@ -314,23 +324,19 @@ bool DiskCache::read_entry(std::uint64_t key, CacheKind kind, std::string& bytes
 }
 
 std::optional<CachedJob> DiskCache::find(std::uint64_t key) {
-  std::string bytes;
-  if (!read_entry(key, CacheKind::Job, bytes)) return std::nullopt;
-  const fs::path file = file_of(key);
-  CacheEntryError error;
-  std::optional<CachedJob> job = decode_cache_entry(bytes, key, &error);
-  if (!job) {
-    ignore(file, error, CacheKind::Job);
+  CachedJob job;
+  if (!find_entry(CacheKind::Job, key, [&](std::string_view payload, std::string& why) { return decode_job(payload, job, why); }))
     return std::nullopt;
-  }
-  ::utimensat(AT_FDCWD, file.c_str(), nullptr, 0);  // now the most recently used (trim())
-  std::lock_guard lock(mutex_);
-  ++stats_.hits;
   return job;
 }
 
 bool DiskCache::find_part(CacheKind kind, std::uint64_t key,
                           const std::function<bool(std::string_view payload, std::string& why)>& decode) {
+  return find_entry(kind, key, decode);
+}
+
+bool DiskCache::find_entry(CacheKind kind, std::uint64_t key,
+                           const std::function<bool(std::string_view payload, std::string& why)>& decode) {
   std::string bytes;
   if (!read_entry(key, kind, bytes)) return false;
   const fs::path file = file_of(key, kind);
@@ -341,9 +347,9 @@ bool DiskCache::find_part(CacheKind kind, std::uint64_t key,
     ignore(file, payload ? CacheEntryError{DiskIgnore::Contents, "bad contents: " + why} : error, kind);
     return false;
   }
-  ::utimensat(AT_FDCWD, file.c_str(), nullptr, 0);
+  ::utimensat(AT_FDCWD, file.c_str(), nullptr, 0);  // now the most recently used (trim())
   std::lock_guard lock(mutex_);
-  ++stats_.part_hits;
+  ++(kind == CacheKind::Job ? stats_.hits : stats_.part_hits);
   return true;
 }
 

@@ -159,6 +159,9 @@ class DiskCache {
   // The bytes of the file of (key, kind): true when read; else counts a miss (of `kind`), after
   // ignoring an unreadable file.
   bool read_entry(std::uint64_t key, CacheKind kind, std::string& bytes);
+  // The entry of (key, kind) read, checked and given to decode; a bad one ignored. Counts a hit.
+  bool find_entry(CacheKind kind, std::uint64_t key,
+                  const std::function<bool(std::string_view payload, std::string& why)>& decode);
   bool write_entry(const std::filesystem::path& file, std::string_view bytes);  // counts failures
 
   std::filesystem::path dir_;
