@@ -7,7 +7,8 @@
 // sphere, Igea blended on as the head, armadillo's crop standing for the Victory's wings) and
 // Figure 9 examples/spiky_snake_woman.json (that body and head deformed by an ffd, minus a
 // segment's tunnel). A scene whose meshes are missing (Igea comes from ../shared) is skipped with
-// a message.
+// a message. Counter quality_s: the seconds of the quality pass in the scene's global
+// polygonizations (the 250-curve bodies of the two snake-woman rows), for the pass's share of the meshing.
 #include "bench/bench_util.hpp"
 #include "meshers/mesh_plan.hpp"
 #include "runtime/scene.hpp"
@@ -52,12 +53,23 @@ void BM_Table1(benchmark::State& state) {
   MeshOptions o;
   o.precision = tree->mesher_settings().precision;
   std::size_t triangles = 0;
+  double pass = 0.0;  // the quality pass inside the run's global polygonizations, seconds
   tbb::task_arena arena(static_cast<int>(state.range(1)));
-  for (auto _ : state) arena.execute([&] { triangles = mesh_tree(*tree, o).mesh->triangles.size(); });
+  for (auto _ : state)
+    arena.execute([&] {
+      const MeshResult r = mesh_tree(*tree, o);
+      triangles = r.mesh->triangles.size();
+      pass = 0.0;
+      for (const NodeReport& n : r.nodes) pass += n.polygonize.quality.seconds;
+    });
   state.SetLabel(row.scene);
   state.counters["triangles"] = static_cast<double>(triangles);
   state.counters["paper_triangles"] = row.triangles;
   state.counters["paper_s"] = row.seconds;
+  // Issue 9's cost target reads the pass against the rest of the meshing: quality_s / (the
+  // row's time - quality_s). Slabs and bands run in parallel, so at 2 threads quality_s is
+  // their wall time, like the row's. The local strategies' seam polish is not counted here.
+  state.counters["quality_s"] = pass;
 }
 BENCHMARK(BM_Table1)
     ->ArgsProduct({{0, 1, 2, 3, 4}, {1, 2}})
