@@ -7,6 +7,7 @@
 #include "meshers/sweep.hpp"
 #include "meshers/warp_mesh.hpp"
 #include "nodes/mesh_leaf.hpp"
+#include "nodes/warps.hpp"
 #include "runtime/subtree_hash.hpp"
 #include "runtime/tape.hpp"
 #include "runtime/tape_eval.hpp"
@@ -53,6 +54,13 @@ const char* to_string(JobReason r) {
 namespace {
 
 constexpr std::uint32_t kNoJob = ~0u;
+
+// The strength F of a node whose field goes through a mesh: a mesh leaf's (its parameters R, F,
+// ...) or an ffd's (nodes/warps.hpp: the header's last value).
+double leaf_strength(const Graph& g, NodeId n) {
+  const auto p = g.params_of(n);
+  return g.kind[n] == NodeKind::Ffd ? p[kFfdHeader - 1] : p[1];
+}
 
 struct Job {
   NodeId node = kNone;
@@ -402,7 +410,11 @@ std::shared_ptr<const TriangleMesh> Runner::execute(const Job& job, NodeReport& 
   const NodeId n = job.node;
   const double T = tree_.threshold(), h = o_.precision;
   switch (job.strategy) {
-    case JobStrategy::SharedLeaf: return g->meshes[g->mesh[n]]->surface();
+    case JobStrategy::SharedLeaf:
+      // A leaf of negative strength carves what it is blended with; alone its field is nowhere
+      // above T (> 0), so its solid, and its mesh, is empty.
+      if (leaf_strength(*g, n) < 0) return std::make_shared<const TriangleMesh>();
+      return g->meshes[g->mesh[n]]->surface();
     case JobStrategy::Global: return global(n, g, r, jobs_.size() == 1);
     case JobStrategy::Sweep: {
       // Held while it is built: the mesh's arrays (about 24 bytes a triangle) and their growth.

@@ -9,6 +9,7 @@
 
 #include <algorithm>
 #include <array>
+#include <span>
 #include <unordered_map>
 #include <vector>
 
@@ -23,8 +24,12 @@ std::uint64_t edge_key(std::uint32_t a, std::uint32_t b) {
   return (std::uint64_t(std::min(a, b)) << 32) | std::uint64_t(std::max(a, b));
 }
 
-// Newton steps toward f = T along the gradient, for a batch of points.
-void project(std::vector<glm::dvec3>& pts, const TapeEvaluator& field, double T) {
+// Newton steps toward f = T along the gradient, for a batch of points. A point that would end
+// further than reach[i] from where it started (or not finite) stays there: where no surface is
+// near (a weak or negative field, a gradient almost zero) the steps fly off, and an edge split
+// at a point far away comes out longer, so refinement would never end.
+void project(std::vector<glm::dvec3>& pts, std::span<const double> reach, const TapeEvaluator& field, double T) {
+  const std::vector<glm::dvec3> start = pts;
   std::vector<double> f(pts.size());
   std::vector<glm::dvec3> g(pts.size());
   for (int step = 0; step < kNewtonSteps; ++step) {
@@ -33,6 +38,10 @@ void project(std::vector<glm::dvec3>& pts, const TapeEvaluator& field, double T)
       const double g2 = glm::dot(g[i], g[i]);
       if (g2 > 0) pts[i] -= ((f[i] - T) / g2) * g[i];
     }
+  }
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    const glm::dvec3 d = pts[i] - start[i];
+    if (!(glm::dot(d, d) <= reach[i] * reach[i])) pts[i] = start[i];
   }
 }
 
@@ -75,12 +84,15 @@ TriangleMesh warp_mesh(const TriangleMesh& child, const std::function<glm::dvec3
     s.passes = pass + 1;
     s.edges_split += long_edges.size();
     // New vertices: midpoints in the child's space, projected onto the child's surface.
+    // A midpoint may move up to half its edge: as far as the surface bulges from a chord.
     std::vector<glm::dvec3> mids(long_edges.size());
+    std::vector<double> reach(long_edges.size());
     for (std::size_t i = 0; i < long_edges.size(); ++i) {
       const auto a = std::uint32_t(long_edges[i] >> 32), b = std::uint32_t(long_edges[i] & 0xffffffffu);
       mids[i] = 0.5 * (local[a] + local[b]);
+      reach[i] = 0.5 * glm::length(local[a] - local[b]);
     }
-    if (field) project(mids, *field, T);
+    if (field) project(mids, reach, *field, T);
     std::unordered_map<std::uint64_t, std::uint32_t> mid_of;
     mid_of.reserve(long_edges.size() * 2);
     // Sized exactly (an insert past the capacity doubles it): the result is held as long as

@@ -3,9 +3,12 @@
 // watertight.
 #include "meshers/mesh_checks.hpp"
 #include "meshers/mesh_plan.hpp"
+#include "meshers/sweep.hpp"
+#include "meshers/warp_mesh.hpp"
 #include "nodes/mesh_leaf.hpp"
 #include "runtime/builder.hpp"
 #include "runtime/optimize.hpp"
+#include "runtime/tape.hpp"
 #include "runtime/tape_eval.hpp"
 #include "tests/support/random_tree.hpp"
 #include "tools/scenes.hpp"
@@ -69,6 +72,59 @@ TEST(MeshPlan, WarpedMeshesStayWatertightAndOnTheSurface) {
     EXPECT_EQ(r.nodes[0].strategy, JobStrategy::Sweep);
     EXPECT_EQ(r.nodes[1].strategy, JobStrategy::WarpedChild);
   }
+}
+
+// A mesh leaf of negative strength carves: alone its field is nowhere above T, so its solid is
+// empty, and so is every mesh built on it alone (it used to answer its own triangles: an affine
+// warp of it then refined its stretched edges by Newton steps toward a surface that is not
+// there, 320 triangles becoming 16.6 million). Beside another operand, the local strategies
+// give the global polygonizer's solid (the union used to fall back to it).
+TEST(MeshPlan, NegativeMeshLeavesHaveNoMeshOfTheirOwn) {
+  Builder b(kT);
+  const auto sphere = MeshLeaf::load(test::cgal_mesh("sphere.off"));
+  const NodeId carve = b.mesh(sphere, {0.3, -1.0});
+  const NodeId moved = b.affine(carve, glm::scale(glm::rotate(glm::dmat4(1.0), 1.0, dvec3(0, 0, 1)), dvec3(1.3, 1.3, 0.65)));
+  for (const NodeId alone : {carve, moved}) {
+    const Tree t = b.build(alone);
+    const MeshResult r = mesh_tree(t, at(0.05));
+    EXPECT_TRUE(r.mesh->triangles.empty()) << r.mesh->triangles.size() << " triangles";
+  }
+  const NodeId ball = b.point({0, 0, 0}, {2.0});
+  const NodeId small = b.affine(carve, glm::translate(glm::dmat4(1.0), dvec3(0.9, 0, 0)) * glm::scale(glm::dmat4(1.0), dvec3(0.4)));
+  for (const NodeId root : {b.unite({ball, small}), b.blend({ball, small}), b.subtract({ball, small})}) {
+    const Tree t = b.build(root);
+    const MeshResult local = mesh_tree(t, at(0.03)), global = mesh_tree(t, at(0.03, MeshStrategy::Global));
+    const MeshChecks c = check_mesh(*local.mesh), g = check_mesh(*global.mesh);
+    EXPECT_TRUE(c.watertight());
+    EXPECT_EQ(c.self_intersecting_pairs, 0u);
+    EXPECT_NEAR(c.volume, g.volume, 0.005 * g.volume);
+    EXPECT_NE(local.nodes.back().reason, JobReason::Fallback) << local.nodes.back().fallback_cause;
+  }
+}
+
+// A warped mesh's new vertices go onto the child's surface by Newton steps; where there is no
+// surface near (here a field negative everywhere), a step that flies off is not taken and the
+// vertex stays at its edge's midpoint, so the refinement is the midpoints' own and ends.
+TEST(MeshPlan, WarpRefinementKeepsMidpointsWhereNoSurfaceIsNear) {
+  Builder b(kT);
+  const Tree ball = b.build(b.point({0, 0, 0}, {1.0}));
+  const TriangleMesh sphere = sweep_mesh(ball.graph(), ball.root(), kT, 0.2);
+  const Tree carve = b.build(b.point({0, 0, 0}, {1.0, -1.0}));
+  const TapeEvaluator nowhere(std::make_shared<const Tape>(compile_tape(carve.graph_ptr(), carve.root(), kT)));
+  const auto stretch = [](const glm::dvec3& p) { return dvec3(3.0 * p.x, 1.3 * p.y, p.z); };
+  WarpRemeshStats with, without;
+  const TriangleMesh projected = warp_mesh(sphere, stretch, &nowhere, kT, 0.05, &with);
+  const TriangleMesh midpoints = warp_mesh(sphere, stretch, nullptr, kT, 0.05, &without);
+  EXPECT_TRUE(projected.triangles == midpoints.triangles);
+  EXPECT_TRUE(projected.positions == midpoints.positions);
+  EXPECT_EQ(with.passes, without.passes);
+  // Each pass halves the split edges (the warp stretches by at most 3); a quad's diagonal may
+  // take one more.
+  double longest = 0;
+  for (const glm::uvec3& t : sphere.triangles)
+    for (int k = 0; k < 3; ++k) longest = std::max(longest, glm::length(sphere.positions[t[k]] - sphere.positions[t[(k + 1) % 3]]));
+  EXPECT_LE(with.passes, int(std::ceil(std::log2(3.0 * longest / 0.05))) + 1);
+  EXPECT_GT(with.passes, 1);
 }
 
 TEST(MeshPlan, HintsWinOverTheRequest) {
