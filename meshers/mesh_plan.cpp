@@ -435,7 +435,17 @@ std::shared_ptr<const TriangleMesh> Runner::execute(const Job& job, NodeReport& 
       WarpRemeshStats ws;
       auto mesh = std::make_shared<const TriangleMesh>(warp_mesh(input(job, 0), forward_map(*g, n), &child_field, T, 1.5 * h, &ws));
       r.edges_split = ws.edges_split;
-      return mesh;
+      // An affine map that split nothing moves the child's triangles as a whole: they cross as
+      // little as the child's did. A bent map's straight triangles, and midpoints projected onto
+      // the child's surface where it comes near itself (one may land on the other sheet), can
+      // cross: then the node's surface is polygonized, as for a sweep that overlaps itself.
+      if (g->kind[n] == NodeKind::Affine && ws.edges_split == 0) return mesh;
+      const std::size_t pairs = find_self_intersections(*mesh, 0).pairs;
+      if (pairs == 0) return mesh;
+      r.reason = JobReason::Fallback;
+      r.fallback_cause = "the warped mesh overlaps itself (" + std::to_string(pairs) + " intersecting triangle pairs)";
+      r.strategy = JobStrategy::Global;
+      return global(n, g, r, false);
     }
     case JobStrategy::DeformedChild: {
       auto leaf = deform_child_mesh(g, n, input(job, 0), 1.5 * h, T);
