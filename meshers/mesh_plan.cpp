@@ -256,6 +256,10 @@ class Runner {
   std::shared_ptr<const TriangleMesh> execute(const Job& job, NodeReport& r);
   std::shared_ptr<const TriangleMesh> global(NodeId n, const std::shared_ptr<const Graph>& g, NodeReport& r, bool report_progress);
   std::shared_ptr<const TriangleMesh> trim(const Job& job, const std::shared_ptr<const Graph>& g, NodeReport& r);
+  // `mesh` (a sweep's or a warp's, named by `what`) when it crosses nothing, else the node's
+  // surface polygonized, reported as a fallback.
+  std::shared_ptr<const TriangleMesh> unless_crossing(std::shared_ptr<const TriangleMesh> mesh, const char* what, NodeId n,
+                                                      const std::shared_ptr<const Graph>& g, NodeReport& r);
   std::shared_ptr<const Graph> current_graph() {
     std::lock_guard lock(graph_mutex_);
     return graph_;
@@ -422,13 +426,7 @@ std::shared_ptr<const TriangleMesh> Runner::execute(const Job& job, NodeReport& 
       const MemoryReservation building(budget_, 48.0 * triangles,
                                        "the sweep mesh of node " + g->label(n) + " (" + format_estimate(triangles) +
                                            " triangles)");
-      auto mesh = std::make_shared<const TriangleMesh>(sweep_mesh(*g, n, T, h));
-      const std::size_t pairs = find_self_intersections(*mesh, 0).pairs;
-      if (pairs == 0) return mesh;
-      r.reason = JobReason::Fallback;
-      r.fallback_cause = "the sweep mesh overlaps itself (" + std::to_string(pairs) + " intersecting triangle pairs)";
-      r.strategy = JobStrategy::Global;
-      return global(n, g, r, false);
+      return unless_crossing(std::make_shared<const TriangleMesh>(sweep_mesh(*g, n, T, h)), "the sweep mesh", n, g, r);
     }
     case JobStrategy::WarpedChild: {
       const TapeEvaluator child_field(std::make_shared<const Tape>(compile_tape(g, g->children_of(n)[0], T)));
@@ -440,12 +438,7 @@ std::shared_ptr<const TriangleMesh> Runner::execute(const Job& job, NodeReport& 
       // the child's surface where it comes near itself (one may land on the other sheet), can
       // cross: then the node's surface is polygonized, as for a sweep that overlaps itself.
       if (g->kind[n] == NodeKind::Affine && ws.edges_split == 0) return mesh;
-      const std::size_t pairs = find_self_intersections(*mesh, 0).pairs;
-      if (pairs == 0) return mesh;
-      r.reason = JobReason::Fallback;
-      r.fallback_cause = "the warped mesh overlaps itself (" + std::to_string(pairs) + " intersecting triangle pairs)";
-      r.strategy = JobStrategy::Global;
-      return global(n, g, r, false);
+      return unless_crossing(std::move(mesh), "the warped mesh", n, g, r);
     }
     case JobStrategy::DeformedChild: {
       auto leaf = deform_child_mesh(g, n, input(job, 0), 1.5 * h, T);
@@ -480,6 +473,16 @@ std::shared_ptr<const TriangleMesh> Runner::global(NodeId n, const std::shared_p
     r.refinements.push_back("precision " + std::to_string(p.precision) + ": " + why);
     p.precision *= kRefineFactor;
   }
+}
+
+std::shared_ptr<const TriangleMesh> Runner::unless_crossing(std::shared_ptr<const TriangleMesh> mesh, const char* what,
+                                                            NodeId n, const std::shared_ptr<const Graph>& g, NodeReport& r) {
+  const std::size_t pairs = find_self_intersections(*mesh, 0).pairs;
+  if (pairs == 0) return mesh;
+  r.reason = JobReason::Fallback;
+  r.fallback_cause = std::string(what) + " overlaps itself (" + std::to_string(pairs) + " intersecting triangle pairs)";
+  r.strategy = JobStrategy::Global;
+  return global(n, g, r, false);
 }
 
 std::shared_ptr<const TriangleMesh> Runner::trim(const Job& job, const std::shared_ptr<const Graph>& g, NodeReport& r) {
