@@ -72,13 +72,11 @@ Guess first_guess(const float* own, int a, int b, double T) {
 
 }  // namespace
 
-void march(const Grid& grid, glm::ivec3 b, const std::uint8_t* label, Scratch& sc, BrickOutput& out,
-           const std::uint8_t* cells) {
+void march(const Grid& grid, glm::ivec3 b, const std::uint8_t* label, Scratch& sc, const std::uint8_t* cells) {
   const glm::i64vec3 base = glm::i64vec3(b) * std::int64_t(kCells);
   sc.keys.clear();
   sc.ends.clear();
   sc.cell_begin.clear();
-  out.triangles.clear();
   auto edge = [&](glm::ivec3 p, glm::ivec3 q) {
     const glm::ivec3 d = q - p;  // monotone: every component 0 or 1
     const std::uint64_t key = grid.point_index(base + glm::i64vec3(p)) * 8 + std::uint64_t(d.x + 2 * d.y + 4 * d.z);
@@ -89,7 +87,7 @@ void march(const Grid& grid, glm::ivec3 b, const std::uint8_t* label, Scratch& s
   for (int cz = 0; cz < kCells; ++cz)
     for (int cy = 0; cy < kCells; ++cy)
       for (int cx = 0; cx < kCells; ++cx) {
-        sc.cell_begin.push_back(static_cast<std::uint32_t>(out.triangles.size()));
+        sc.cell_begin.push_back(static_cast<std::uint32_t>(sc.keys.size() / 3));
         int mask = 0;
         glm::ivec3 corner[8];
         for (int c = 0; c < 8; ++c) {
@@ -110,13 +108,11 @@ void march(const Grid& grid, glm::ivec3 b, const std::uint8_t* label, Scratch& s
             std::array<glm::dvec3, 3> mid;
             for (int i = 0; i < 3; ++i) mid[i] = 0.5 * glm::dvec3(corner[e[i].first] + corner[e[i].second]);
             if (glm::dot(glm::cross(mid[1] - mid[0], mid[2] - mid[0]), outward) < 0) std::swap(e[1], e[2]);
-            std::array<std::uint64_t, 3> tri;
             for (int i = 0; i < 3; ++i) {
               glm::ivec3 p = corner[e[i].first], q = corner[e[i].second];
               if (p.x > q.x || p.y > q.y || p.z > q.z) std::swap(p, q);
-              tri[i] = edge(p, q);
+              edge(p, q);
             }
-            out.triangles.push_back(tri);
           };
           if (ni == 1) {
             emit({{{in[0], out_[0]}, {in[0], out_[1]}, {in[0], out_[2]}}});
@@ -128,7 +124,7 @@ void march(const Grid& grid, glm::ivec3 b, const std::uint8_t* label, Scratch& s
           }
         }
       }
-  sc.cell_begin.push_back(static_cast<std::uint32_t>(out.triangles.size()));
+  sc.cell_begin.push_back(static_cast<std::uint32_t>(sc.keys.size() / 3));
 }
 
 std::size_t place_vertices(const Grid& grid, glm::ivec3 b, std::uint32_t brick_index, const float* own,
@@ -139,8 +135,11 @@ std::size_t place_vertices(const Grid& grid, glm::ivec3 b, std::uint32_t brick_i
   std::iota(sc.order.begin(), sc.order.end(), std::size_t(0));
   std::sort(sc.order.begin(), sc.order.end(), [&](std::size_t x, std::size_t y) { return sc.keys[x] < sc.keys[y]; });
   sc.unique.clear();
-  for (std::size_t i : sc.order)
+  sc.vertex_of.resize(sc.keys.size());
+  for (std::size_t i : sc.order) {
     if (sc.unique.empty() || sc.keys[sc.unique.back()] != sc.keys[i]) sc.unique.push_back(i);
+    sc.vertex_of[i] = static_cast<std::uint16_t>(sc.unique.size() - 1);
+  }
   const std::size_t nv = sc.unique.size();
   for (auto* v : {&sc.pa, &sc.pb}) v->resize(nv);
   for (auto* v : {&sc.fa, &sc.fb, &sc.t, &sc.span, &sc.slope}) v->resize(nv);
@@ -244,10 +243,15 @@ std::size_t place_vertices(const Grid& grid, glm::ivec3 b, std::uint32_t brick_i
     }
     live.resize(kept);
   }
-  out.vertices.resize(nv);
+  // Sized exactly (a fresh vector each): every brick's output is held until the join.
+  out.vertices = std::vector<EdgeVertex>(nv);
   for (std::size_t v = 0; v < nv; ++v)
-    out.vertices[v] = {sc.keys[sc.unique[v]], brick_index, pa[v] + std::clamp(t[v], kMargin, 1.0 - kMargin) * (pb[v] - pa[v]),
-                       glm::vec3(0.0f)};
+    out.vertices[v] = {sc.keys[sc.unique[v]], pa[v] + std::clamp(t[v], kMargin, 1.0 - kMargin) * (pb[v] - pa[v]),
+                       glm::vec3(0.0f), brick_index};
+  // march() met each triangle's three edges in turn: key 3 i + k is corner k of triangle i.
+  out.triangles = std::vector<LocalTriangle>(sc.keys.size() / 3);
+  for (std::size_t i = 0; i < out.triangles.size(); ++i)
+    for (std::size_t k = 0; k < 3; ++k) out.triangles[i][k] = sc.vertex_of[3 * i + k];
   return evaluations;
 }
 
@@ -266,11 +270,12 @@ std::uint8_t octants_at(int i, int j, int k) {
 std::size_t drop_unsampled(const Grid& grid, glm::ivec3 b, const float* own, std::uint8_t octants, const Scratch& sc,
                            BrickOutput& out) {
   const glm::i64vec3 base = glm::i64vec3(b) * std::int64_t(kCells);
-  auto unsampled = [&](std::uint64_t key) {
-    const std::uint64_t dir = key % 8;
+  std::vector<std::uint8_t> unsampled(out.vertices.size());
+  for (std::size_t v = 0; v < out.vertices.size(); ++v) {
+    const std::uint64_t key = out.vertices[v].key, dir = key % 8;
     const glm::ivec3 a(grid.point_at(key / 8) - base), d(int(dir & 1), int((dir >> 1) & 1), int((dir >> 2) & 1));
-    return std::isnan(own[local_index(a)]) || std::isnan(own[local_index(a + d)]);
-  };
+    unsampled[v] = std::isnan(own[local_index(a)]) || std::isnan(own[local_index(a + d)]);
+  }
   // Triangles by cell (march's order): a cell of an octant left out goes whole, even where its
   // corners were sampled for the octants beside it.
   constexpr int half = kCells / 2;
@@ -280,20 +285,33 @@ std::size_t drop_unsampled(const Grid& grid, glm::ivec3 b, const float* own, std
     const int x = c % kCells, y = (c / kCells) % kCells, z = c / (kCells * kCells);
     const bool wanted = (octants >> ((x >= half) + 2 * (y >= half) + 4 * (z >= half))) & 1;
     for (std::uint32_t i = sc.cell_begin[std::size_t(c)]; i < sc.cell_begin[std::size_t(c) + 1]; ++i) {
-      const auto& t = out.triangles[i];
-      drop[i] = !wanted || unsampled(t[0]) || unsampled(t[1]) || unsampled(t[2]);
+      const LocalTriangle& t = out.triangles[i];
+      drop[i] = !wanted || unsampled[t[0]] || unsampled[t[1]] || unsampled[t[2]];
       dropped += drop[i];
     }
   }
   if (dropped == 0) return 0;
-  std::size_t kept = 0;
+  // The vertices the kept triangles use, renumbered in order (so still sorted by key).
+  std::vector<std::uint16_t> renumber(out.vertices.size(), 0);
   for (std::size_t i = 0; i < out.triangles.size(); ++i)
-    if (!drop[i]) out.triangles[kept++] = out.triangles[i];
-  out.triangles.resize(kept);
-  std::vector<std::uint64_t> used;
-  for (const auto& t : out.triangles) used.insert(used.end(), t.begin(), t.end());
-  std::sort(used.begin(), used.end());
-  std::erase_if(out.vertices, [&](const EdgeVertex& v) { return !std::binary_search(used.begin(), used.end(), v.key); });
+    if (!drop[i])
+      for (const std::uint16_t v : out.triangles[i]) renumber[v] = 1;
+  std::vector<EdgeVertex> vertices;
+  vertices.reserve(std::size_t(std::count(renumber.begin(), renumber.end(), std::uint16_t(1))));
+  for (std::size_t v = 0; v < out.vertices.size(); ++v)
+    if (renumber[v]) {
+      renumber[v] = static_cast<std::uint16_t>(vertices.size());
+      vertices.push_back(out.vertices[v]);
+    }
+  std::vector<LocalTriangle> triangles;
+  triangles.reserve(out.triangles.size() - dropped);
+  for (std::size_t i = 0; i < out.triangles.size(); ++i)
+    if (!drop[i]) {
+      const LocalTriangle& t = out.triangles[i];
+      triangles.push_back({renumber[t[0]], renumber[t[1]], renumber[t[2]]});
+    }
+  out.vertices = std::move(vertices);
+  out.triangles = std::move(triangles);
   return dropped;
 }
 
@@ -306,10 +324,7 @@ void crease_normals(const float* own, const TapeEvaluator& eval, const FeatureOp
   for (int c = 0; c < kCells * kCells * kCells; ++c) {
     if (!suspect[c]) continue;
     for (std::uint32_t i = sc.cell_begin[std::size_t(c)]; i < sc.cell_begin[std::size_t(c) + 1]; ++i)
-      for (std::uint64_t key : out.triangles[i])
-        sc.wanted[std::size_t(std::lower_bound(out.vertices.begin(), out.vertices.end(), key,
-                                               [](const EdgeVertex& e, std::uint64_t k) { return e.key < k; }) -
-                              out.vertices.begin())] = 1;
+      for (const std::uint16_t v : out.triangles[i]) sc.wanted[v] = 1;
   }
   sc.at.clear();
   for (std::size_t v = 0; v < nv; ++v)

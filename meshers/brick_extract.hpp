@@ -58,23 +58,31 @@ struct Grid {
 
 /// A vertex on a grid edge, keyed by the edge: lower grid point * 8 + direction (x = 1, y = 2,
 /// z = 4, monotone diagonals combine them).
+/// 48 bytes, no padding: a global run holds every brick's vertices at once (its peak).
 struct EdgeVertex {
   std::uint64_t key;
-  std::uint32_t brick;
   glm::dvec3 position;
   glm::vec3 normal;  // outward unit normal where a crease is suspected, else zero
+  std::uint32_t brick;
 };
 
+/// A brick has fewer than 7 kPoints^3 = 5103 edges (three axes, three face diagonals, one body
+/// diagonal a point): its triangles index its own vertices in 16 bits (6 bytes a triangle, not
+/// the 24 of three edge keys).
+using LocalTriangle = std::array<std::uint16_t, 3>;
+
+/// One brick's extraction: its vertices sorted by key, each vector sized exactly.
 struct BrickOutput {
   std::vector<EdgeVertex> vertices;
-  std::vector<std::array<std::uint64_t, 3>> triangles;  // edge keys
+  std::vector<LocalTriangle> triangles;  // indices into vertices, oriented outward
 };
 
 
 /// Working arrays of one brick's extraction, kept per thread so that the steady state allocates
 /// nothing (their capacity grows to the largest brick and stays).
 struct Scratch {
-  std::vector<std::uint64_t> keys;        // edge keys in order of creation
+  std::vector<std::uint64_t> keys;        // edge keys in order of creation: 3 i + k is triangle i's corner k
+  std::vector<std::uint16_t> vertex_of;   // the vertex each of them became (place_vertices)
   std::vector<std::array<int, 2>> ends;   // their local grid points
   std::vector<std::uint32_t> cell_begin;  // triangles of each cell, x fastest
   std::vector<std::size_t> order, unique;
@@ -96,16 +104,17 @@ struct Refine {
 };
 
 /// The triangles of brick `b` (keys of their vertices' edges, oriented outward) from the
-/// inside labels of its kPoints^3 grid points (x fastest); fills out.triangles and, in
-/// scratch, the edges met and each cell's first triangle. When `cells` is given (kCells^3
-/// flags, x fastest), a cell whose flag is 0 gets no triangles.
-void march(const Grid& grid, glm::ivec3 b, const std::uint8_t* label, Scratch& scratch, BrickOutput& out,
+/// inside labels of its kPoints^3 grid points (x fastest), into scratch: the edges met, three a
+/// triangle, and each cell's first triangle. When `cells` is given (kCells^3 flags, x fastest), a cell
+/// whose flag is 0 gets no triangles.
+void march(const Grid& grid, glm::ivec3 b, const std::uint8_t* label, Scratch& scratch,
            const std::uint8_t* cells = nullptr);
 
 /// One vertex per distinct edge of march(): false position along the edge on `eval` (the
-/// brick's tape) from the brick's samples `own`, threshold T; fills out.vertices, sorted by key.
-/// A NaN sample is a point not evaluated (outside, PolygonizeOptions::brick_filter): a vertex on
-/// an edge to it stays at the edge's midpoint. Returns the number of field values it evaluated.
+/// brick's tape) from the brick's samples `own`, threshold T; fills out.vertices, sorted by key,
+/// and out.triangles (march's, in its order, as indices into them). A NaN sample is a point not
+/// evaluated (outside, PolygonizeOptions::brick_filter): a vertex on an edge to it stays at the
+/// edge's midpoint. Returns the number of field values it evaluated.
 std::size_t place_vertices(const Grid& grid, glm::ivec3 b, std::uint32_t brick_index, const float* own,
                     const std::uint8_t* label, const TapeEvaluator& eval, double T, const Refine& refine,
                     Scratch& scratch, BrickOutput& out);

@@ -54,17 +54,15 @@ std::vector<EdgeVertex> join_bricks(std::vector<BrickOutput>&& outputs, Triangle
   });
   std::vector<Ref>().swap(refs);
   std::vector<std::uint32_t>().swap(vertex);
-  // A triangle's keys are its own brick's vertices, which that brick holds sorted by key.
+  // Every vertex is copied: the bricks' vertices go before the triangles are made, which need
+  // only the numbers (a triangle's corners are its own brick's vertices).
+  tbb::parallel_for(std::size_t(0), outputs.size(), [&](std::size_t b) { std::vector<EdgeVertex>().swap(outputs[b].vertices); });
   mesh.triangles.resize(tri_offset.back());
   tbb::parallel_for(std::size_t(0), outputs.size(), [&](std::size_t b) {
-    const auto& vs = outputs[b].vertices;
-    auto local = [&](std::uint64_t key) {
-      const auto it = std::lower_bound(vs.begin(), vs.end(), key, [](const EdgeVertex& e, std::uint64_t k) { return e.key < k; });
-      return id[offset[b] + std::size_t(it - vs.begin())];
-    };
+    const std::uint32_t* local = id.data() + offset[b];
     for (std::size_t t = 0; t < outputs[b].triangles.size(); ++t) {
-      const auto& tri = outputs[b].triangles[t];
-      mesh.triangles[tri_offset[b] + t] = {local(tri[0]), local(tri[1]), local(tri[2])};
+      const LocalTriangle& tri = outputs[b].triangles[t];
+      mesh.triangles[tri_offset[b] + t] = {local[tri[0]], local[tri[1]], local[tri[2]]};
     }
     outputs[b] = BrickOutput();
   });

@@ -8,7 +8,7 @@
 
 namespace ht {
 
-static_assert(sizeof(brick::EdgeVertex) == 56 && sizeof(brick::KeptBrick) == 56,
+static_assert(sizeof(brick::EdgeVertex) == 48 && sizeof(brick::KeptBrick) == 56,
               "store the new field in encode_kept and decode_kept");
 
 std::string encode_kept(const brick::KeptBrick& k) {
@@ -20,20 +20,17 @@ std::string encode_kept(const brick::KeptBrick& k) {
   w(k.reaches_boundary, vs.size(), with_normal.size(), k.out.triangles.size());
   for (const brick::EdgeVertex& v : vs) w.bytes(&v.key, 8), w.bytes(&v.brick, 4), w.bytes(&v.position, sizeof v.position);
   for (const std::uint32_t v : with_normal) w.bytes(&v, 4), w.bytes(&vs[v].normal, sizeof vs[v].normal);
-  auto index = [&](std::uint64_t key) {
-    return std::uint32_t(std::lower_bound(vs.begin(), vs.end(), key, [](const brick::EdgeVertex& e, std::uint64_t x) { return e.key < x; }) -
-                         vs.begin());
-  };
-  for (const auto& t : k.out.triangles)
-    for (const std::uint64_t key : t) {
-      const std::uint32_t i = index(key);
-      assert(i < vs.size() && vs[i].key == key);  // a brick's triangles use its own vertices (place_vertices)
+  for (const brick::LocalTriangle& t : k.out.triangles)
+    for (const std::uint16_t v : t) {
+      assert(v < vs.size());  // a brick's triangles use its own vertices (place_vertices)
+      const std::uint32_t i = v;
       w.bytes(&i, 4);
     }
   return std::move(w.out);
 }
 
-// The join looks each triangle's keys up among its brick's vertices: the keys must increase.
+// The join takes the lowest brick's copy of each key: the keys must increase, and a brick's
+// triangles index its vertices in 16 bits.
 bool decode_kept(std::string_view payload, brick::KeptBrick& k, std::string& why) {
   CacheReader in(payload);
   std::size_t nv = 0, nn = 0, nt = 0;
@@ -44,7 +41,7 @@ bool decode_kept(std::string_view payload, brick::KeptBrick& k, std::string& why
     vs.resize(nv);
     for (brick::EdgeVertex& v : vs) in.bytes(&v.key, 8), in.bytes(&v.brick, 4), in.bytes(&v.position, sizeof v.position);
   }
-  if (nv > 0xffffffffu) in.fail(std::to_string(nv) + " vertices, more than 32-bit indices reach");
+  if (nv > 0xffffu) in.fail(std::to_string(nv) + " vertices, more than a brick's 16-bit indices reach");
   if (in.error().empty() && in.fits(nn, 4 + sizeof(glm::vec3), "normals"))
     for (std::size_t i = 0; i < nn && in.error().empty(); ++i) {
       std::uint32_t v = 0;
@@ -57,11 +54,11 @@ bool decode_kept(std::string_view payload, brick::KeptBrick& k, std::string& why
   if (in.error().empty() && in.fits(nt, 12, "triangles")) {
     k.out.triangles.resize(nt);
     for (std::size_t t = 0; t < nt && in.error().empty(); ++t)
-      for (std::uint64_t& key : k.out.triangles[t]) {
+      for (std::uint16_t& v : k.out.triangles[t]) {
         std::uint32_t i = 0;
         in.bytes(&i, 4);
         if (i >= nv) in.fail("triangle " + std::to_string(t) + " names vertex " + std::to_string(i) + " of " + std::to_string(nv));
-        else key = vs[i].key;
+        else v = static_cast<std::uint16_t>(i);
       }
   }
   if (in.error().empty() && in.remaining()) in.fail(std::to_string(in.remaining()) + " bytes after the triangles");
@@ -97,7 +94,7 @@ bool decode_piece(std::string_view payload, std::size_t inputs, QualityPiece& p,
   CacheReader in(payload);
   std::size_t nv = 0, nt = 0, np = 0;
   in(nv, nt, np);
-  if (nv > 0xffffffffu) in.fail(std::to_string(nv) + " vertices, more than 32-bit indices reach");
+  if (nv > 0xffffu) in.fail(std::to_string(nv) + " vertices, more than a brick's 16-bit indices reach");
   if (in.error().empty() && in.fits(nv, sizeof(glm::dvec3) + 4, "vertices")) {
     p.mesh.positions.resize(nv);
     in.bytes(p.mesh.positions.data(), nv * sizeof(glm::dvec3));

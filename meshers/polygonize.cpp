@@ -401,7 +401,7 @@ TriangleMesh polygonize_once(std::shared_ptr<const Graph> graph, NodeId root, do
     brick::Scratch& sc = scratch.local();
     std::uint8_t keep_cells[kCells * kCells * kCells];
     if (operands) brick::region_cells(region.data() + a * kBrickPoints, keep_cells);
-    brick::march(grid, b, label, sc, out, operands ? keep_cells : nullptr);
+    brick::march(grid, b, label, sc, operands ? keep_cells : nullptr);
     const TapeEvaluator eval(tapes[a]);
     refined += brick::place_vertices(grid, b, active[a], own, label, eval, T,
                                      {options.refine_steps, options.refine_tolerance}, sc, out);
