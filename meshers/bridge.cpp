@@ -88,9 +88,9 @@ std::vector<double> arc_fractions(const std::vector<glm::dvec3>& pos, std::size_
 }
 
 // The strip between loop a (walked forward) and loop b (walked backward from b[start]). Each
-// step takes the shorter of the two diagonals, unless one loop lags behind the other by more
-// than kLag of its arc length, and never a triangle that would turn against the surface beside
-// it (`side`, the loops' own vertex normals) when the other would not.
+// step takes the shorter of the two diagonals, unless one loop lags behind the other (in arc
+// length), and a triangle that would turn against the surface beside it (`side`, the loops' own
+// vertex normals) only where the other would too or the other loop lags.
 std::vector<glm::uvec3> zip(const std::vector<glm::dvec3>& pos, const std::vector<glm::dvec3>& side,
                             const std::vector<std::uint32_t>& a, const std::vector<std::uint32_t>& b,
                             std::size_t start, double max_width, double& widest) {
@@ -98,7 +98,12 @@ std::vector<glm::uvec3> zip(const std::vector<glm::dvec3>& pos, const std::vecto
   auto A = [&](std::size_t i) { return a[i % m]; };
   auto B = [&](std::size_t j) { return b[(start + n - j % n) % n]; };
   const std::vector<double> sa = arc_fractions(pos, m, A), sb = arc_fractions(pos, n, B);
-  constexpr double kLag = 0.04;  // of the loops' lengths
+  // How far one loop may run ahead of the other, as a fraction of their lengths: 4%, and no
+  // more than half the widest band allowed (on a long loop, 4% is wider than any band).
+  double length = 0.0;
+  for (std::size_t i = 0; i < m; ++i) length += glm::length(pos[A(i + 1)] - pos[A(i)]);
+  for (std::size_t j = 0; j < n; ++j) length += glm::length(pos[B(j + 1)] - pos[B(j)]);
+  const double lag = length > 0 ? std::min(0.04, 0.5 * max_width / (0.5 * length)) : 0.04;
   std::vector<glm::uvec3> out;
   out.reserve(m + n);
   std::size_t i = 0, j = 0;
@@ -108,13 +113,20 @@ std::vector<glm::uvec3> zip(const std::vector<glm::dvec3>& pos, const std::vecto
     const bool b_ok = j < n && glm::dot(normal(pos, B(j), B(j + 1), A(i)), up) > 0;
     // The shorter diagonal follows the loops' local shape; the arc fractions keep the walk from
     // running away along one loop where the shapes differ.
-    bool advance_a;
-    if (j == n || (i < m && sb[j] - sa[i] > kLag)) advance_a = true;
-    else if (i == m || sa[i] - sb[j] > kLag) advance_a = false;
-    else advance_a = glm::length(pos[A(i + 1)] - pos[B(j)]) <= glm::length(pos[B(j + 1)] - pos[A(i)]);
-    if (advance_a && !a_ok && b_ok) advance_a = false;
-    if (!advance_a && !b_ok && a_ok) advance_a = true;
-    const double d = advance_a ? glm::length(pos[A(i + 1)] - pos[B(j)]) : glm::length(pos[B(j + 1)] - pos[A(i)]);
+    constexpr double kNever = std::numeric_limits<double>::infinity();
+    const double da = i < m ? glm::length(pos[A(i + 1)] - pos[B(j)]) : kNever;
+    const double db = j < n ? glm::length(pos[B(j + 1)] - pos[A(i)]) : kNever;
+    const bool a_lags = j == n || (i < m && sb[j] - sa[i] > lag), b_lags = !a_lags && (i == m || sa[i] - sb[j] > lag);
+    bool advance_a = a_lags || (!b_lags && da <= db);
+    // A triangle turned against the surface is avoided by advancing the other loop, unless that
+    // one lags already: where the two loops touch and cross by a hair (a cut that wanders across
+    // the patch's rim), one loop's edge can see all the other's next vertices on its wrong side,
+    // and sparing it ran the other loop away until the band passed its width (the bowl at
+    // h = 0.001 and the winged bunny at 0.0068 fell back to global so). The few turned triangles
+    // made instead are the band's relaxing, untangling and remeshing's to mend.
+    if (advance_a && !a_ok && b_ok && !a_lags) advance_a = false;
+    if (!advance_a && !b_ok && a_ok && !b_lags) advance_a = true;
+    const double d = advance_a ? da : db;
     widest = std::max(widest, d);
     if (d > max_width) throw BridgeError("a band would span " + std::to_string(d) + ", wider than " + std::to_string(max_width));
     if (advance_a) {
