@@ -85,15 +85,17 @@ TEST(Examples, BlendsStayLocalAwayFromTheirOwnPrecision) {
   // A trim blend joins each operand's cut loop to the patch's by a strip. Where the two loops
   // touched and crossed by a hair, the strip used to spare a triangle turned against the surface
   // by running the other loop ahead until the band passed its width, and the blend fell back to
-  // a global polygonization (four to eight times the triangles and the time): each of these.
+  // a global polygonization (four to eight times the triangles and the time): each of the first
+  // five. Where a turned triangle the strip makes is not mended (the snake-woman's wings at 1.25
+  // of its precision), the blend falls back rather than return a fold.
   struct Case {
     const char* file;
     double factor;  // of the scene's own precision
-    bool igea;
+    bool igea, local;
   };
-  for (const Case& k : {Case{"winged_bunny.json", 0.7, false}, Case{"winged_bunny.json", 0.85, false},
-                        Case{"winged_bunny.json", 1.6, false}, Case{"restoration.json", 1.25, true},
-                        Case{"bowl.json", 0.5, true}}) {
+  for (const Case& k : {Case{"winged_bunny.json", 0.7, false, true}, Case{"winged_bunny.json", 0.85, false, true},
+                        Case{"winged_bunny.json", 1.6, false, true}, Case{"restoration.json", 1.25, true, true},
+                        Case{"bowl.json", 0.5, true, true}, Case{"snake_woman.json", 1.25, true, false}}) {
     SCOPED_TRACE(std::string(k.file) + " at " + std::to_string(k.factor) + " of its precision");
     if (k.igea && !test::igea_available()) {
       std::printf("skipping %s: no igea-67k.ply in data/meshes/ or ../shared\n", k.file);
@@ -102,7 +104,7 @@ TEST(Examples, BlendsStayLocalAwayFromTheirOwnPrecision) {
     const Tree tree = load_scene(std::filesystem::path(HYBRIDTREE_SOURCE_DIR) / "examples" / k.file);
     const MeshResult r = mesh_tree(tree, test::mesh_options(k.factor * tree.mesher_settings().precision));
     for (const NodeReport& n : r.nodes) {
-      if (n.node != r.tree->root()) continue;
+      if (n.node != r.tree->root() || !k.local) continue;
       EXPECT_NE(n.reason, JobReason::Fallback) << n.fallback_cause;
     }
     const MeshChecks c = check_mesh(*r.mesh);
