@@ -443,8 +443,12 @@ Buckets hierarchy_pairs(const TriangleMesh& mesh, const std::vector<Shape>& shap
   std::unique_ptr<RTCDeviceTy, decltype(&rtcReleaseDevice)> device(rtcNewDevice(nullptr), rtcReleaseDevice);
   if (!device) throw std::runtime_error("find_self_intersections: cannot create an Embree device");
   std::vector<RTCBounds> boxes(shapes.size());
+  // A degenerate triangle intersects nothing here (on_collide skips it): an empty box (lower
+  // above upper), which Embree leaves out. Given the point boxes of a mesh collapsed to one
+  // point, its builder asserted (a zero-size scene) and aborted the process.
   tbb::parallel_for(std::size_t(0), shapes.size(), [&](std::size_t t) {
-    boxes[t] = float_box(tri_of(mesh, static_cast<std::uint32_t>(t), shapes[t]));
+    if (shapes[t].axis < 0) boxes[t] = RTCBounds{1.0f, 1.0f, 1.0f, 0.0f, 0.0f, 0.0f, 0.0f, 0.0f};
+    else boxes[t] = float_box(tri_of(mesh, static_cast<std::uint32_t>(t), shapes[t]));
   });
   std::unique_ptr<RTCSceneTy, decltype(&rtcReleaseScene)> scene(rtcNewScene(device.get()), rtcReleaseScene);
   RTCGeometry geom = scene ? rtcNewGeometry(device.get(), RTC_GEOMETRY_TYPE_USER) : nullptr;

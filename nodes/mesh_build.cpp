@@ -12,6 +12,7 @@
 #include <glm/geometric.hpp>
 
 #include <algorithm>
+#include <cstdio>
 #include <numeric>
 #include <tuple>
 #include <unordered_map>
@@ -271,6 +272,33 @@ void keep_majority(std::vector<glm::uvec3>& tris, Topology& topo, const Shells& 
     }
 }
 
+// Closed leaves: a shell that encloses no volume (every triangle flat on the others, or all its
+// corners at one point) bounds no solid and has no outside to orient toward; the rays and BVH
+// builds behind the queries are not made for it either (an Embree builder asserted on one).
+void check_volumes(const std::string& name, const std::vector<glm::dvec3>& pos, const std::vector<glm::uvec3>& tris,
+                   const Shells& shells) {
+  std::vector<Aabb> box(shells.count);
+  for (std::uint32_t t = 0; t < tris.size(); ++t)
+    for (int k = 0; k < 3; ++k) box[shells.of[t]].grow(pos[tris[t][k]]);
+  std::vector<double> volume(shells.count, 0.0);
+  std::vector<std::size_t> count(shells.count, 0);
+  for (std::uint32_t t = 0; t < tris.size(); ++t) {
+    const std::uint32_t s = shells.of[t];
+    const glm::dvec3 o = box[s].center(), a = pos[tris[t][0]] - o, b = pos[tris[t][1]] - o, c = pos[tris[t][2]] - o;
+    volume[s] += glm::dot(a, glm::cross(b, c)) / 6.0;
+    ++count[s];
+  }
+  for (std::uint32_t s = 0; s < shells.count; ++s) {
+    const double size = glm::length(box[s].size());
+    if (std::abs(volume[s]) > 1e-12 * size * size * size) continue;
+    char across[32];
+    std::snprintf(across, sizeof across, "%.3g", size);
+    fail(name, (shells.count > 1 ? "shell " + std::to_string(s) + " (" : "the mesh (") + std::to_string(count[s]) +
+                   " triangles, " + across + " across) encloses no volume: its triangles lie flat on each other or " +
+                   "collapse to a point");
+  }
+}
+
 // Closed leaves with several shells: two shells that cross make the inside test meaningless
 // (nesting by parity), so they are refused. Pairs within one shell are not looked for.
 void check_crossing_shells(const std::string& name, const std::vector<glm::dvec3>& pos,
@@ -390,6 +418,7 @@ std::shared_ptr<MeshLeaf> MeshLeaf::build(std::vector<glm::dvec3> positions,
     flipped.resize(triangles.size(), 0);
     shells = orient_shells(name, triangles, topo, flipped);
   }
+  if (!winding) check_volumes(name, positions, triangles, shells);
   // Holes closed above add triangles nobody searched.
   if (!winding && !(intersection_free && report.triangles_added == 0))
     check_crossing_shells(name, positions, triangles, shells, report);

@@ -616,6 +616,16 @@ TEST(MeshErrors, InMemory) {
   m = message_of([&] { MeshLeaf::from_triangles(kTetra, {{0, 2, 1}, {0, 1, 1}}, "rep"); });
   EXPECT_NE(m.find("rep: face 1 repeats vertex 1"), std::string::npos) << m;
 
+  // Closed, but bounding no solid: every corner at one point (Embree's builder aborted the
+  // process on its boxes), and a flat pillow of two faces. A winding leaf takes them (empty).
+  const std::vector<glm::dvec3> point(4, glm::dvec3(0.25, 0.5, 0.75));
+  m = message_of([&] { MeshLeaf::from_triangles(point, kTetraFaces, "point"); });
+  EXPECT_NE(m.find("point: the mesh (4 triangles, 0 across) encloses no volume"), std::string::npos) << m;
+  m = message_of([&] { MeshLeaf::from_triangles(kTetra, {{0, 1, 2}, {0, 2, 1}}, "pillow"); });
+  EXPECT_NE(m.find("pillow: the mesh (2 triangles"), std::string::npos) << m;
+  EXPECT_NE(m.find("encloses no volume"), std::string::npos) << m;
+  EXPECT_NO_THROW(MeshLeaf::from_triangles(point, kTetraFaces, "point", false, MeshInside::Winding));
+
   // A Moebius strip has one boundary loop; with repair on, orientation fails first.
   std::vector<glm::dvec3> strip;
   std::vector<glm::uvec3> quads;

@@ -442,6 +442,18 @@ TEST(SelfIntersections, SmallTrianglesFarApartHaveNone) {
   EXPECT_EQ(count(m), 0u);
 }
 
+TEST(SelfIntersections, TrianglesCollapsedToOnePointHaveNone) {
+  // Every box a point: Embree's hierarchy builder asserted on such a scene and aborted the
+  // process (seen under an address-space limit). Degenerate triangles intersect nothing here.
+  TriangleMesh m;
+  m.positions.assign(4, dvec3(0.5, -0.25, 2.0));
+  m.triangles = {{0, 2, 1}, {0, 1, 3}, {0, 3, 2}, {1, 2, 3}};
+  EXPECT_EQ(count(m), 0u);
+  const MeshChecks c = check_mesh(m);
+  EXPECT_EQ(c.degenerate_triangles, 4u);
+  EXPECT_EQ(c.self_intersecting_pairs, 0u);
+}
+
 TEST(SelfIntersections, RandomSoupsMatchBruteForce) {
   Rng rng = seeded();
   std::uniform_real_distribution<double> d(0, 1), size(-0.15, 0.15);
