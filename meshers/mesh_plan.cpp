@@ -54,6 +54,10 @@ const char* to_string(JobReason r) {
 namespace {
 
 constexpr std::uint32_t kNoJob = ~0u;
+// A warped child's refinement makes at most this many times the child's triangles, plus the
+// slack (a small child under a strong taper): 64 is an edge stretched eightfold everywhere.
+constexpr std::size_t kWarpGrowth = 64;
+constexpr std::size_t kWarpSlack = std::size_t(1) << 16;
 
 // The strength F of a node whose field goes through a mesh: a mesh leaf's (its parameters R, F,
 // ...) or an ffd's (nodes/warps.hpp: the header's last value).
@@ -431,8 +435,20 @@ std::shared_ptr<const TriangleMesh> Runner::execute(const Job& job, NodeReport& 
     case JobStrategy::WarpedChild: {
       const TapeEvaluator child_field(std::make_shared<const Tape>(compile_tape(g, g->children_of(n)[0], T)));
       WarpRemeshStats ws;
-      auto mesh = std::make_shared<const TriangleMesh>(warp_mesh(input(job, 0), forward_map(*g, n), &child_field, T, 1.5 * h, &ws));
+      const TriangleMesh& child = input(job, 0);
+      const std::size_t cap = kWarpGrowth * child.triangles.size() + kWarpSlack;
+      auto mesh = std::make_shared<const TriangleMesh>(
+          warp_mesh(child, forward_map(*g, n), &child_field, T, 1.5 * h, &ws, nullptr, {}, cap));
       r.edges_split = ws.edges_split;
+      if (ws.stopped) {
+        // The warp stretches the child's edges past any refinement (a twist of a million
+        // radians a unit): the node's own surface is polygonized, as the grid bounds it.
+        mesh.reset();
+        r.reason = JobReason::Fallback;
+        r.fallback_cause = "the warped mesh would need more than " + std::to_string(cap) + " triangles";
+        r.strategy = JobStrategy::Global;
+        return global(n, g, r, false);
+      }
       // An affine map that split nothing moves the child's triangles as a whole: they cross as
       // little as the child's did. A bent map's straight triangles, and midpoints projected onto
       // the child's surface where it comes near itself (one may land on the other sheet), can

@@ -56,7 +56,7 @@ std::function<glm::dvec3(const glm::dvec3&)> forward_map(const Graph& graph, Nod
 
 TriangleMesh warp_mesh(const TriangleMesh& child, const std::function<glm::dvec3(const glm::dvec3&)>& warp,
                        const TapeEvaluator* field, double T, double max_edge, WarpRemeshStats* stats,
-                       const Aabb* region, std::span<const std::uint8_t> only) {
+                       const Aabb* region, std::span<const std::uint8_t> only, std::size_t max_triangles) {
   auto eligible = [&](std::uint32_t v) { return only.empty() || v >= only.size() || only[v] != 0; };
   std::vector<glm::dvec3> local = child.positions;  // child space
   std::vector<glm::uvec3> tris = child.triangles;
@@ -81,6 +81,11 @@ TriangleMesh warp_mesh(const TriangleMesh& child, const std::function<glm::dvec3
     std::sort(long_edges.begin(), long_edges.end());
     long_edges.erase(std::unique(long_edges.begin(), long_edges.end()), long_edges.end());
     if (long_edges.empty()) break;
+    // Each split edge adds one triangle on either side, at most.
+    if (tris.size() + 2 * long_edges.size() > max_triangles) {
+      s.stopped = true;
+      break;
+    }
     s.passes = pass + 1;
     s.edges_split += long_edges.size();
     // New vertices: midpoints in the child's space, projected onto the child's surface.

@@ -12,6 +12,7 @@
 #include "runtime/graph.hpp"
 
 #include <functional>
+#include <limits>
 #include <memory>
 #include <span>
 
@@ -22,6 +23,9 @@ class TapeEvaluator;
 struct WarpRemeshStats {
   int passes = 0;
   std::size_t edges_split = 0;
+  /// A pass would have made more than max_triangles: refinement stopped there, and the mesh
+  /// returned is the last pass's, with edges still longer than max_edge.
+  bool stopped = false;
 };
 
 /// Moves child_mesh (in the child's space) by `warp` and splits edges longer than max_edge after
@@ -32,11 +36,13 @@ struct WarpRemeshStats {
 /// A null `child_field` leaves new vertices at the midpoints (for meshes with no one field of
 /// their own, such as a partial Boolean result). `warp` is called from several threads at once.
 /// With `only` (one flag per vertex of child_mesh), an edge is split only when both its ends are
-/// flagged or new.
+/// flagged or new. No pass makes more than `max_triangles` (WarpRemeshStats::stopped): a warp
+/// that stretches edges without end (a twist of 1e6 radians a unit) would fill memory.
 TriangleMesh warp_mesh(const TriangleMesh& child_mesh, const std::function<glm::dvec3(const glm::dvec3&)>& warp,
                        const TapeEvaluator* child_field, double threshold, double max_edge,
                        WarpRemeshStats* stats = nullptr, const Aabb* region = nullptr,
-                       std::span<const std::uint8_t> only = {});
+                       std::span<const std::uint8_t> only = {},
+                       std::size_t max_triangles = std::numeric_limits<std::size_t>::max());
 
 /// The forward map of warp node `node` (affine, twist, taper, bend or ffd).
 std::function<glm::dvec3(const glm::dvec3&)> forward_map(const Graph& graph, NodeId node);

@@ -127,6 +127,32 @@ TEST(MeshPlan, WarpRefinementKeepsMidpointsWhereNoSurfaceIsNear) {
   EXPECT_GT(with.passes, 1);
 }
 
+// A twist of a million radians a unit turns a ball about its own axis: the same ball, but its
+// sweep mesh's edges between two heights come out across the whole ball at every split, so
+// refinement filled 6 GB and ended in std::bad_alloc. It stops at kWarpGrowth times the
+// child's triangles (plus a slack) and the node is polygonized: a ball.
+TEST(MeshPlan, AWarpThatStretchesWithoutEndIsPolygonized) {
+  Builder b(kT);
+  const NodeId ball = b.point({0, 0, 0}, {1.0});
+  const Tree twisted = b.build(b.twist(ball, Axis::Z, {0, 0, 0}, 1e6));
+  const MeshResult r = mesh_tree(twisted, test::mesh_options(0.1));
+  const NodeReport& root = r.nodes.back();
+  EXPECT_EQ(root.reason, JobReason::Fallback);
+  EXPECT_NE(root.fallback_cause.find("the warped mesh would need more than"), std::string::npos) << root.fallback_cause;
+  const MeshChecks c = check_mesh(*r.mesh);
+  EXPECT_TRUE(c.watertight());
+  EXPECT_EQ(c.genus, 0);
+  const double r0 = 0.4542;  // the ball's surface at T = 0.5, F = 1
+  EXPECT_NEAR(c.volume, 4.0 / 3.0 * 3.14159265358979 * r0 * r0 * r0, 0.03 * c.volume);
+  // The warp alone: the cap is a pass's triangles, never exceeded.
+  const TriangleMesh sphere = sweep_mesh(twisted.graph(), ball, kT, 0.1);
+  WarpRemeshStats ws;
+  const TriangleMesh capped = warp_mesh(sphere, forward_map(twisted.graph(), twisted.root()), nullptr, kT, 0.15, &ws,
+                                        nullptr, {}, 10 * sphere.triangles.size());
+  EXPECT_TRUE(ws.stopped);
+  EXPECT_LE(capped.triangles.size(), 10 * sphere.triangles.size());
+}
+
 // Random trees under a stretching warp: the warped child's split edges get midpoints projected
 // onto the child's surface, which may land on another sheet where the surface comes near itself
 // (random trees found 7 of 150 meshes crossing themselves at h = 0.05). Such a warp's mesh is

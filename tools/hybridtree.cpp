@@ -38,6 +38,7 @@
 #include <functional>
 #include <map>
 #include <memory>
+#include <new>
 #include <string>
 #include <vector>
 
@@ -289,6 +290,10 @@ int cmd_mesh(const MeshArgs& a) {
     throw InputError(a.scene + ": " + e.what());
   } catch (const ht::MemoryBudgetError& e) {
     throw InputError(a.scene + ": " + e.what() + "; raise --memory-budget (GiB) or coarsen --precision");
+  } catch (const std::bad_alloc&) {
+    // A stage the budget does not foresee ran the machine out of memory; nothing was written.
+    throw std::runtime_error(a.scene + ": out of memory while meshing, in a stage the memory budget does not bound; " +
+                             "try a coarser --precision; nothing was written");
   }
   const ht::TriangleMesh& mesh = *run.result.mesh;
   const ht::MeshChecks& checks = run.checks;
