@@ -25,10 +25,15 @@ void check_precision(const Tree& tree, double precision) {
   const double across = glm::length(solid.size());
   if (precision <= across) return;
   char buf[256];
-  std::snprintf(buf, sizeof buf,
-                "precision %g is coarser than the whole scene (its solid lies in a box %g across): no part of the "
-                "surface can be resolved; use at most %g (the scene's default: %g)",
-                precision, across, across, default_precision(tree, 0.0));
+  if (!(across > 0))  // a radius of 1e-300: the box underflows to a point
+    std::snprintf(buf, sizeof buf,
+                  "the scene's solid lies in a box of no size (a radius or scale below what doubles hold?): no "
+                  "precision can resolve its surface");
+  else
+    std::snprintf(buf, sizeof buf,
+                  "precision %g is coarser than the whole scene (its solid lies in a box %g across): no part of the "
+                  "surface can be resolved; use at most %g (the scene's default: %g)",
+                  precision, across, across, default_precision(tree, 0.0));
   throw PolygonizeError(buf);
 }
 

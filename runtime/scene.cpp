@@ -275,7 +275,15 @@ class Loader {
       const NodeId c = child(o, "child", depth);
       if (!o.has("matrix") && !o.has("scale") && !o.has("rotate") && !o.has("translate"))
         throw Fail{o.path(), "affine needs matrix or at least one of scale, rotate, translate"};
-      id = b_.affine(c, affine_matrix(o));
+      const glm::dmat4 m = affine_matrix(o);
+      try {
+        id = b_.affine(c, m);
+      } catch (const BuildError& e) {
+        // Made from scale, rotate and translate, the matrix is no key of the scene's: what made
+        // it singular is the scale (1e200 or 1e-200: invertible on paper, not in doubles).
+        if (o.has("matrix") || e.key != "matrix") throw;
+        throw Fail{o.has("scale") ? o.at("scale") : o.path(), "makes the map singular in double precision (not invertible)"};
+      }
     } else if (type == "twist") {
       const NodeId c = child(o, "child", depth);
       id = b_.twist(c, parse_axis(o), o.vec3("center", glm::dvec3(0.0)), o.number("rate"));

@@ -177,16 +177,22 @@ TEST(Cli, MeshRefusesCleanlyAndLeavesNoFile) {
   const auto coarse = test::run_cli("mesh " + s + " -o " + (dir / "m.ply").string() + " --precision 1e9");
   EXPECT_EQ(coarse.code, 2);
   EXPECT_NE(coarse.err.find("coarser than the whole scene"), std::string::npos) << coarse.err;
+  // A solid whose box underflows to a point has no precision to offer ("use at most 0" before).
+  const auto point = test::run_cli("mesh " + write_scene(dir, "p.json", R"({"hybridtree": 1, "root": {"type": "point",
+      "center": [0,0,0], "radius": 1e-300}})") + " -o " + (dir / "p.ply").string());
+  EXPECT_EQ(point.code, 2);
+  EXPECT_NE(point.err.find("lies in a box of no size"), std::string::npos) << point.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "p.ply"));
   // An estimate no integer holds is said as such, not as an overflowed count.
   const auto huge = test::run_cli("mesh " + write_scene(dir, "h.json", R"({"hybridtree": 1, "root": {"type": "point",
       "center": [0,0,0], "radius": 1e300}})") + " -o " + (dir / "m.ply").string());
   EXPECT_EQ(huge.code, 2);
   EXPECT_NE(huge.err.find("more than 10^15 triangles"), std::string::npos) << huge.err;
   EXPECT_EQ(huge.err.find("-9223372036854775808"), std::string::npos) << huge.err;
-  // Nothing but the scenes is left in the folder: no partial output.
+  // Nothing but the three scenes is left in the folder: no partial output.
   std::size_t files = 0;
   for ([[maybe_unused]] const auto& e : std::filesystem::directory_iterator(dir)) ++files;
-  EXPECT_EQ(files, 2u);
+  EXPECT_EQ(files, 3u);
   std::filesystem::create_directory(dir / "d.ply");
   const auto onto = test::run_cli("mesh " + s + " -o " + (dir / "d.ply").string() + " --precision 0.1");
   EXPECT_EQ(onto.code, 1);

@@ -74,6 +74,10 @@ std::vector<BadCase> bad_cases() {
       {scene(R"({"type": "crop", "child": )" + p + R"(, "min": [0,0,0], "max": [-1,1,1]})"), "root.max: must be greater than min"},
       {scene(R"({"type": "affine", "child": )" + p + "}"), "root: affine needs matrix"},
       {scene(R"({"type": "affine", "child": )" + p + R"(, "scale": 0})"), "root.scale: must be non-zero"},
+      // Invertible on paper, not in doubles: named where the scene says it, not as a matrix.
+      {scene(R"({"type": "affine", "child": )" + p + R"(, "scale": 1e200})"), "root.scale: makes the map singular"},
+      {scene(R"({"type": "affine", "child": )" + p + R"(, "scale": 1e-200, "translate": [1,0,0]})"),
+       "root.scale: makes the map singular"},
       {scene(R"({"type": "affine", "child": )" + p + R"(, "matrix": [1,0,0,0, 0,1,0,0, 0,2,0,0, 0,0,0,1]})"),
        "root.matrix: is singular"},
       {scene(R"({"type": "affine", "child": )" + p + R"(, "matrix": [1,0,0,0, 0,1,0,0, 0,0,1,0, 1,0,0,1]})"),
