@@ -10,6 +10,7 @@
 #include "meshers/mesh_plan.hpp"
 #include "nodes/mesh_leaf.hpp"
 #include "runtime/builder.hpp"
+#include "runtime/scene.hpp"
 #include "tests/support/random_tree.hpp"
 
 #include <glm/geometric.hpp>
@@ -22,6 +23,7 @@
 
 #include <algorithm>
 #include <cstring>
+#include <filesystem>
 #include <set>
 
 using namespace ht;
@@ -281,6 +283,21 @@ TEST(LocalStrategies, FallBackWhereTheyCannot) {
     EXPECT_FALSE(job.fallback_cause.empty()) << c.name;
     EXPECT_TRUE(check_mesh(*r.mesh).watertight()) << c.name;
   }
+}
+
+// A stress run's local blend (a crop of a curve, a difference, a doubly twisted cylinder as the
+// region; tests/data/stress) whose bands kept a triangle folded over the union's crease: such
+// a result is no longer returned; the node is polygonized, with no fold.
+TEST(LocalBlends, AFoldLeftInTheBandsFallsBack) {
+  const Tree tree = load_scene(std::filesystem::path(HYBRIDTREE_SOURCE_DIR) / "tests/data/stress/folded_local_blend.json");
+  const MeshResult r = mesh_tree(tree, at(tree.mesher_settings().precision));
+  const NodeReport& job = report_of(r, r.tree->root());
+  EXPECT_EQ(job.reason, JobReason::Fallback);
+  EXPECT_NE(job.fallback_cause.find("folded over in the bands"), std::string::npos) << job.fallback_cause;
+  const MeshChecks c = check_mesh(*r.mesh);
+  EXPECT_TRUE(c.watertight());
+  EXPECT_EQ(c.self_intersecting_pairs, 0u);
+  EXPECT_EQ(c.folded_triangles, 0u);
 }
 
 TEST(LocalCrops, PrimitivesAndMeshLeaves) {
