@@ -94,7 +94,7 @@ bool decode_piece(std::string_view payload, std::size_t inputs, QualityPiece& p,
   CacheReader in(payload);
   std::size_t nv = 0, nt = 0, np = 0;
   in(nv, nt, np);
-  if (nv > 0xffffu) in.fail(std::to_string(nv) + " vertices, more than a brick's 16-bit indices reach");
+  if (nv > 0xffffffffu) in.fail(std::to_string(nv) + " vertices, more than 32-bit indices reach");
   if (in.error().empty() && in.fits(nv, sizeof(glm::dvec3) + 4, "vertices")) {
     p.mesh.positions.resize(nv);
     in.bytes(p.mesh.positions.data(), nv * sizeof(glm::dvec3));

@@ -5,6 +5,7 @@
 // keeps the least recently used last. The parts of a global polygonization (bricks, quality
 // pieces, clean regions) reused by the next process after an edit, and checked when read. The
 // CLI's --cache end to end.
+#include "meshers/cache_parts.hpp"
 #include "meshers/disk_cache.hpp"
 #include "meshers/mesh_plan.hpp"
 #include "meshers/node_cache.hpp"
@@ -103,6 +104,29 @@ std::vector<fs::path> files_in(const fs::path& dir, const std::string& ending) {
 void copy_folder(const fs::path& from, const fs::path& to) {
   fs::remove_all(to);
   fs::copy(from, to);
+}
+
+// A brick's triangles index its vertices in 16 bits; a quality piece (a slab of the whole mesh)
+// in 32: a piece of 70,000 vertices round-trips, a brick of as many is refused. (The brick's
+// limit once reached the pieces too, and every large piece was written, refused and improved
+// again on each run, with a warning.)
+TEST(DiskCache, PiecesHoldMoreVerticesThanABrickCan) {
+  QualityPiece piece;
+  const std::uint32_t n = 70000;
+  for (std::uint32_t v = 0; v < n; ++v) piece.mesh.positions.push_back({double(v), 0.0, 0.0}), piece.origin.push_back(v);
+  for (std::uint32_t v = 0; v + 2 < n; v += 3) piece.mesh.triangles.push_back({v, v + 1, v + 2});
+  QualityPiece back;
+  std::string why;
+  ASSERT_TRUE(decode_piece(encode_piece(piece), n, back, why)) << why;
+  EXPECT_EQ(back.mesh.positions.size(), std::size_t(n));
+  EXPECT_TRUE(back.mesh.triangles == piece.mesh.triangles);
+
+  brick::KeptBrick brick;
+  for (std::uint32_t v = 0; v < n; ++v) brick.out.vertices.push_back({std::uint64_t(v), {double(v), 0.0, 0.0}, glm::vec3(0.0f), 0});
+  brick.out.triangles.push_back({0, 1, 2});
+  brick::KeptBrick refused;
+  EXPECT_FALSE(decode_kept(encode_kept(brick), refused, why));
+  EXPECT_NE(why.find("16-bit"), std::string::npos) << why;
 }
 
 TEST(DiskCache, AWarmFolderGivesAFreshProcessTheSameBytesAndReports) {
