@@ -12,12 +12,15 @@
 #include "runtime/tape.hpp"
 #include "runtime/tape_eval.hpp"
 
+#include <glm/geometric.hpp>
 #include <tbb/flow_graph.h>
+#include <tbb/parallel_for.h>
 
 #include <bit>
 #include <chrono>
 #include <cmath>
 #include <exception>
+#include <functional>
 #include <mutex>
 
 namespace ht {
@@ -58,6 +61,21 @@ constexpr std::uint32_t kNoJob = ~0u;
 // slack (a small child under a strong taper): 64 is an edge stretched eightfold everywhere.
 constexpr std::size_t kWarpGrowth = 64;
 constexpr std::size_t kWarpSlack = std::size_t(1) << 16;
+
+// The most triangles a warped child's refinement may make: 64 times the child's, plus four times
+// what the warped child's area needs at edges of `edge` (a coarse leaf under a scale at a fine
+// precision refines that far, legitimately), plus a slack. A warp that stretches without end
+// (a twist of a million radians a unit) passes it within its ten passes.
+std::size_t warp_cap(const TriangleMesh& child, const std::function<glm::dvec3(const glm::dvec3&)>& warp, double edge) {
+  std::vector<glm::dvec3> moved(child.positions.size());
+  tbb::parallel_for(std::size_t(0), moved.size(), [&](std::size_t v) { moved[v] = warp(child.positions[v]); });
+  double area = 0.0;
+  for (const glm::uvec3& t : child.triangles)
+    area += 0.5 * glm::length(glm::cross(moved[t[1]] - moved[t[0]], moved[t[2]] - moved[t[0]]));
+  const double needed = area / (0.433 * edge * edge);  // equilateral triangles of that edge
+  const double cap = double(kWarpGrowth) * double(child.triangles.size()) + double(kWarpSlack) + 4.0 * needed;
+  return cap < 1e15 ? std::size_t(cap) : std::size_t(1e15);
+}
 
 // The strength F of a node whose field goes through a mesh: a mesh leaf's (its parameters R, F,
 // ...) or an ffd's (nodes/warps.hpp: the header's last value).
@@ -436,9 +454,9 @@ std::shared_ptr<const TriangleMesh> Runner::execute(const Job& job, NodeReport& 
       const TapeEvaluator child_field(std::make_shared<const Tape>(compile_tape(g, g->children_of(n)[0], T)));
       WarpRemeshStats ws;
       const TriangleMesh& child = input(job, 0);
-      const std::size_t cap = kWarpGrowth * child.triangles.size() + kWarpSlack;
-      auto mesh = std::make_shared<const TriangleMesh>(
-          warp_mesh(child, forward_map(*g, n), &child_field, T, 1.5 * h, &ws, nullptr, {}, cap));
+      const auto warp = forward_map(*g, n);
+      const std::size_t cap = warp_cap(child, warp, 1.5 * h);
+      auto mesh = std::make_shared<const TriangleMesh>(warp_mesh(child, warp, &child_field, T, 1.5 * h, &ws, nullptr, {}, cap));
       r.edges_split = ws.edges_split;
       if (ws.stopped) {
         // The warp stretches the child's edges past any refinement (a twist of a million

@@ -295,7 +295,7 @@ void check_volumes(const std::string& name, const std::vector<glm::dvec3>& pos, 
     std::snprintf(across, sizeof across, "%.3g", size);
     fail(name, (shells.count > 1 ? "shell " + std::to_string(s) + " (" : "the mesh (") + std::to_string(count[s]) +
                    " triangles, " + across + " across) encloses no volume: its triangles lie flat on each other or " +
-                   "collapse to a point");
+                   "collapse to a point; remove it from the file (repair does not)");
   }
 }
 

@@ -151,6 +151,17 @@ TEST(MeshPlan, AWarpThatStretchesWithoutEndIsPolygonized) {
                                         nullptr, {}, 10 * sphere.triangles.size());
   EXPECT_TRUE(ws.stopped);
   EXPECT_LE(capped.triangles.size(), 10 * sphere.triangles.size());
+  // A coarse mesh leaf scaled at a fine precision refines far past 64 times its triangles, but
+  // no further than its area asks: it stays a warped child (a multiple of the child alone sent
+  // it to the global polygonizer: three times the triangles, five times the time).
+  const TriangleMesh coarse = sweep_mesh(twisted.graph(), ball, kT, 0.4);
+  const auto leaf = MeshLeaf::from_triangles(coarse.positions, coarse.triangles, "coarse ball");
+  Builder b2(kT);
+  const Tree scaled = b2.build(b2.affine(b2.mesh(leaf, {0.1}), glm::scale(glm::dmat4(1.0), glm::dvec3(1.5))));
+  const MeshResult s = mesh_tree(scaled, test::mesh_options(0.007));
+  EXPECT_NE(s.nodes.back().reason, JobReason::Fallback) << s.nodes.back().fallback_cause;
+  EXPECT_GT(s.mesh->triangles.size(), 64 * coarse.triangles.size());
+  EXPECT_TRUE(check_mesh(*s.mesh).watertight());
 }
 
 // Random trees under a stretching warp: the warped child's split edges get midpoints projected
