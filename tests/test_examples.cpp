@@ -108,9 +108,7 @@ TEST(Examples, BlendsStayLocalAwayFromTheirOwnPrecision) {
       if (n.node != r.tree->root() || !k.local) continue;
       EXPECT_NE(n.reason, JobReason::Fallback) << n.fallback_cause;
     }
-    MeshChecks c = check_mesh(*r.mesh);
-    SurfaceField field(r.tree->graph_ptr(), r.tree->root(), tree.threshold(), r.mesh->positions.front(), 8.0 * h);
-    measure_surface_error(*r.mesh, field, c);  // what counts folded triangles
+    const MeshChecks c = test::checks_with_surface(r, tree.threshold());  // folded triangles counted
     EXPECT_TRUE(c.watertight());
     EXPECT_EQ(c.self_intersecting_pairs, 0u);
     EXPECT_EQ(c.folded_triangles, 0u);

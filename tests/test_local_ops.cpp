@@ -5,7 +5,6 @@
 // same bytes at any thread count.
 #include "meshers/local_parts.hpp"
 #include "meshers/mesh_checks.hpp"
-#include "meshers/surface_field.hpp"
 #include "meshers/sweep.hpp"
 #include "meshers/warp_mesh.hpp"
 #include "meshers/mesh_plan.hpp"
@@ -296,9 +295,7 @@ TEST(LocalBlends, AFoldLeftInTheBandsFallsBack) {
   const NodeReport& job = report_of(r, r.tree->root());
   EXPECT_EQ(job.reason, JobReason::Fallback);
   EXPECT_NE(job.fallback_cause.find("folded over in the bands"), std::string::npos) << job.fallback_cause;
-  MeshChecks c = check_mesh(*r.mesh);
-  SurfaceField field(r.tree->graph_ptr(), r.tree->root(), tree.threshold(), r.mesh->positions.front(), 8.0 * h);
-  measure_surface_error(*r.mesh, field, c);  // what counts folded triangles
+  const MeshChecks c = test::checks_with_surface(r, tree.threshold());  // folded triangles counted
   EXPECT_TRUE(c.watertight());
   EXPECT_EQ(c.self_intersecting_pairs, 0u);
   EXPECT_EQ(c.folded_triangles, 0u);

@@ -101,6 +101,12 @@ Polygonized polygonize_checked(const Tree& tree, const PolygonizeOptions& option
   return r;
 }
 
+MeshChecks checks_with_surface(const MeshResult& r, double threshold) {
+  MeshChecks c = check_mesh(*r.mesh);
+  if (!r.mesh->triangles.empty()) measure_surface_error(*r.mesh, r.tree->evaluator(), threshold, c);
+  return c;
+}
+
 void run_on_stack(std::size_t bytes, const std::function<void()>& fn) {
   struct Job {
     const std::function<void()>* fn;

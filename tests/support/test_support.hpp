@@ -74,4 +74,8 @@ struct Polygonized {
 };
 Polygonized polygonize_checked(const Tree& tree, const PolygonizeOptions& options);
 
+/// check_mesh() of a mesh plan's result with its surface error measured on the result's tree at
+/// T = threshold: the checks that count folded triangles, which check_mesh() alone leaves at 0.
+MeshChecks checks_with_surface(const MeshResult& r, double threshold);
+
 }  // namespace ht::test
