@@ -17,9 +17,12 @@
 namespace ht::local {
 
 
-TriangleMesh RefinedMesh::step(const TriangleMesh& from, const Step& s) const {
-  return warp_mesh(from, [](const glm::dvec3& p) { return p; }, surface_.get(), threshold_, s.edge, nullptr, &s.region,
-                   s.only);
+TriangleMesh RefinedMesh::step(const TriangleMesh& from, const Step& s, bool* stopped) const {
+  WarpRemeshStats st;
+  TriangleMesh out = warp_mesh(from, [](const glm::dvec3& p) { return p; }, surface_.get(), threshold_, s.edge, &st,
+                               &s.region, s.only, s.max_triangles);
+  if (stopped) *stopped = st.stopped;
+  return out;
 }
 
 const TriangleMesh& RefinedMesh::mesh() {
@@ -31,17 +34,21 @@ const TriangleMesh& RefinedMesh::mesh() {
   return mesh_;
 }
 
-void RefinedMesh::push(Step s) {
+bool RefinedMesh::push(Step s) {
+  bool stopped = false;
   if (!source_) {
-    mesh_ = step(mesh_, s);
-    return;
+    mesh_ = step(mesh_, s, &stopped);
+    return !stopped;
   }
-  mesh_ = step(steps_.empty() ? *source_ : mesh(), s);
+  mesh_ = step(steps_.empty() ? *source_ : mesh(), s, &stopped);
   steps_.push_back(std::move(s));
   made_ = true;
+  return !stopped;
 }
 
-void RefinedMesh::refine(const Aabb& region, double edge) { push({region, edge, {}}); }
+bool RefinedMesh::refine(const Aabb& region, double edge, std::size_t max_triangles) {
+  return push({region, edge, {}, max_triangles});
+}
 
 void RefinedMesh::refine_near_seam(const Aabb& region, double edge, const BatchField& cut) {
   const TriangleMesh& from = source_ && steps_.empty() ? *source_ : mesh();

@@ -9,6 +9,7 @@
 #include "runtime/tape_eval.hpp"
 
 #include <functional>
+#include <limits>
 #include <memory>
 #include <span>
 #include <vector>
@@ -92,7 +93,9 @@ class RefinedMesh {
       : source_(&source), surface_(std::move(surface)), threshold_(threshold) {}
   RefinedMesh(TriangleMesh owned, double threshold) : threshold_(threshold), mesh_(std::move(owned)) {}
 
-  void refine(const Aabb& region, double edge);
+  /// False when the refinement would make more than `max_triangles` (then it stopped there, with
+  /// edges still longer than `edge`: warp_mesh's cap).
+  bool refine(const Aabb& region, double edge, std::size_t max_triangles = std::numeric_limits<std::size_t>::max());
   /// The same, but only near the seam `cut` makes inside `region` (near_seam, with long edges
   /// at kCoarseEdges * edge): splitting elsewhere would only halve a scan's own long thin
   /// triangles into slivers the seam never reaches. `cut` is evaluated at the vertices in
@@ -112,9 +115,10 @@ class RefinedMesh {
     Aabb region;
     double edge;
     std::vector<std::uint8_t> only;  // empty: every vertex
+    std::size_t max_triangles = std::numeric_limits<std::size_t>::max();
   };
-  TriangleMesh step(const TriangleMesh& from, const Step& s) const;
-  void push(Step s);
+  TriangleMesh step(const TriangleMesh& from, const Step& s, bool* stopped = nullptr) const;
+  bool push(Step s);
   const TriangleMesh* source_ = nullptr;
   std::shared_ptr<const TapeEvaluator> surface_;
   double threshold_;

@@ -190,6 +190,30 @@ TEST(LocalBooleans, RefinedOperandsAreMadeAgainExactly) {
   local::RefinedMesh owned(TriangleMesh(once), kT);
   owned.drop();
   EXPECT_TRUE(same(owned.mesh(), once));
+  // A refinement past its triangle cap says so, and stops there.
+  local::RefinedMesh capped(sphere, surface, kT);
+  EXPECT_TRUE(capped.refine(first, 0.3, once.triangles.size()));
+  EXPECT_FALSE(capped.refine(second, 0.15, once.triangles.size() + 1));
+  EXPECT_LT(capped.mesh().triangles.size(), twice.triangles.size());
+}
+
+// Operands that lie on each other: their cuts keep both copies of the shared surface, whose
+// triangles cross in thousands of pairs. Untangling and halving the edges only multiplied them
+// (a random scene of the stress run held 15 GB for two minutes); the Boolean is polygonized at
+// once instead, and says why.
+TEST(LocalBooleans, OperandsLyingOnEachOtherArePolygonizedAtOnce) {
+  const Tree stress = load_scene(std::filesystem::path(HYBRIDTREE_SOURCE_DIR) / "tests/data/stress/coincident_operands_4gb.json");
+  Builder b(kT);
+  const Tree twins = b.build(b.intersect({b.point({0, 0, 0}, {1.0}), b.point({0, 0, 0}, {1.0})}));
+  for (const auto& [tree, h] : {std::pair{&stress, stress.mesher_settings().precision}, std::pair{&twins, 0.02}}) {
+    const MeshResult r = mesh_tree(*tree, at(h));
+    const NodeReport& job = report_of(r, r.tree->root());
+    EXPECT_EQ(job.reason, JobReason::Fallback);
+    EXPECT_NE(job.fallback_cause.find("the operands lie on each other"), std::string::npos) << job.fallback_cause;
+    const MeshChecks c = check_mesh(*r.mesh);
+    EXPECT_TRUE(c.watertight());
+    EXPECT_EQ(c.self_intersecting_pairs, 0u);
+  }
 }
 
 TEST(LocalBooleans, PrimitivesAndMeshLeaves) {
