@@ -40,7 +40,8 @@ bool needs_ffd_preparation(const Graph& g, NodeId root) {
 }
 
 std::shared_ptr<const MeshLeaf> deform_child_mesh(const std::shared_ptr<const Graph>& graph, NodeId n,
-                                                  const TriangleMesh& child_mesh, double max_edge, double threshold) {
+                                                  const TriangleMesh& child_mesh, double max_edge, double threshold,
+                                                  std::size_t* crossing) {
   const Graph& g = *graph;
   if (child_mesh.triangles.empty())
     throw PolygonizeError("ffd node " + g.label(n) + ": its child's surface is empty, there is nothing to deform");
@@ -61,9 +62,10 @@ std::shared_ptr<const MeshLeaf> deform_child_mesh(const std::shared_ptr<const Gr
   // and the mesh leaf that takes it to find nothing are built side by side (the leaf's build is
   // mostly serial); when it does find pairs, the leaf is built again from the unfolded mesh.
   const std::string name = "deformed mesh of ffd node " + g.label(n);
-  auto build = [&name](std::vector<glm::dvec3> p, std::vector<glm::uvec3> t, bool intersection_free) {
+  auto build = [&name](std::vector<glm::dvec3> p, std::vector<glm::uvec3> t, bool intersection_free,
+                       MeshInside inside = MeshInside::Closed) {
     try {
-      return MeshLeaf::from_triangles(std::move(p), std::move(t), name, false, MeshInside::Closed, intersection_free);
+      return MeshLeaf::from_triangles(std::move(p), std::move(t), name, false, inside, intersection_free);
     } catch (const MeshError& e) {
       throw PolygonizeError(e.what());
     }
@@ -79,14 +81,19 @@ std::shared_ptr<const MeshLeaf> deform_child_mesh(const std::shared_ptr<const Gr
                            failed = std::current_exception();
                          }
                        });
+  if (crossing) *crossing = 0;
   if (pairs.empty()) {
     if (failed) std::rethrow_exception(failed);
     return leaf;
   }
   std::vector<std::uint8_t> no_crease;
   unfold(mesh, no_crease, pairs, kUnfoldRounds);
+  if (crossing) *crossing = pairs.size();
   // `pairs` now holds every intersecting pair left; with none, MeshLeaf need not search again.
-  return build(std::move(mesh.positions), std::move(mesh.triangles), pairs.empty());
+  // With some, ray parity and pseudo-normals disagree about the inside where the mesh crosses
+  // itself (a torn lattice's whole outside came out inside): the winding number decides there.
+  return build(std::move(mesh.positions), std::move(mesh.triangles), pairs.empty(),
+               pairs.empty() ? MeshInside::Closed : MeshInside::Winding);
 }
 
 std::shared_ptr<const Graph> attach_ffd_mesh(const Graph& graph, NodeId n, std::shared_ptr<const MeshLeaf> leaf) {

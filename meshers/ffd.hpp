@@ -21,10 +21,14 @@ bool needs_ffd_preparation(const Graph& graph, NodeId root);
 /// by the lattice. With max_edge > 0, edges the lattice stretches past max_edge are split first,
 /// their new vertices put on the child's surface {f = threshold} (meshers/warp_mesh.hpp).
 /// Throws PolygonizeError when the child's mesh is empty or the deformed mesh is not a valid
-/// closed mesh.
+/// closed mesh. `crossing` (optional) receives the intersecting triangle pairs the deformed mesh
+/// still has after its folds were unfolded (a lattice whose outer control points are moved tears
+/// the child where it leaves the lattice box, and the torn band can cross itself). Such a leaf
+/// takes its inside from the winding number (MeshInside::Winding), so its field is still defined,
+/// but its mesh is no output.
 std::shared_ptr<const MeshLeaf> deform_child_mesh(const std::shared_ptr<const Graph>& graph, NodeId ffd,
                                                   const TriangleMesh& child_mesh, double max_edge = 0.0,
-                                                  double threshold = 0.0);
+                                                  double threshold = 0.0, std::size_t* crossing = nullptr);
 
 /// A copy of `graph` in which ffd node `ffd` carries `leaf` (node ids unchanged, supports
 /// recomputed).

@@ -475,13 +475,21 @@ std::shared_ptr<const TriangleMesh> Runner::execute(const Job& job, NodeReport& 
       return unless_crossing(std::move(mesh), "the warped mesh", n, g, r);
     }
     case JobStrategy::DeformedChild: {
-      auto leaf = deform_child_mesh(g, n, input(job, 0), 1.5 * h, T);
+      std::size_t crossing = 0;
+      auto leaf = deform_child_mesh(g, n, input(job, 0), 1.5 * h, T, &crossing);
+      std::shared_ptr<const Graph> attached;
       {
         std::lock_guard lock(graph_mutex_);
         graph_ = attach_ffd_mesh(*graph_, n, leaf);
+        attached = graph_;
         leaves_[std::size_t(&job - jobs_.data())] = leaf;
       }
-      return leaf->surface();
+      if (crossing == 0) return leaf->surface();
+      // The deformed mesh defines the node's field all the same; its surface is polygonized.
+      r.reason = JobReason::Fallback;
+      r.fallback_cause = "the deformed mesh overlaps itself (" + std::to_string(crossing) + " intersecting triangle pairs)";
+      r.strategy = JobStrategy::Global;
+      return global(n, attached, r, false);
     }
     default: return trim(job, g, r);
   }

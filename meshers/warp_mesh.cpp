@@ -19,6 +19,11 @@ namespace {
 constexpr int kMaxPasses = 10;
 constexpr int kNewtonSteps = 3;
 constexpr double kStretch = 1.01;  // an edge the warp lengthens by more than this is stretched
+// An edge this many times shorter than max_edge in the child's space is not split: where the map
+// stretches more than that (or jumps: an ffd whose lattice's outer control points are moved
+// tears the child at the lattice box, where points outside are unmoved) the halves of an edge
+// come out as long as the edge, and every pass doubled the edges across the tear.
+constexpr double kMaxStretch = 32.0;
 
 std::uint64_t edge_key(std::uint32_t a, std::uint32_t b) {
   return (std::uint64_t(std::min(a, b)) << 32) | std::uint64_t(std::max(a, b));
@@ -64,7 +69,7 @@ TriangleMesh warp_mesh(const TriangleMesh& child, const std::function<glm::dvec3
   // An ffd's warp (a trivariate Bernstein sum) costs more than the rest of this function.
   tbb::parallel_for(std::size_t(0), local.size(), [&](std::size_t i) { world[i] = warp(local[i]); });
   WarpRemeshStats s;
-  const double limit2 = max_edge * max_edge;
+  const double limit2 = max_edge * max_edge, shortest2 = limit2 / (kMaxStretch * kMaxStretch);
   for (int pass = 0; pass < kMaxPasses; ++pass) {
     // Edges too long after warping, each once, in a deterministic order.
     std::vector<std::uint64_t> long_edges;
@@ -74,9 +79,14 @@ TriangleMesh warp_mesh(const TriangleMesh& child, const std::function<glm::dvec3
         // Long after warping, and longer than in the child: a rigid warp leaves the child's
         // own edges as they were (the paper: it preserves the triangles' shapes).
         const double warped2 = glm::dot(world[a] - world[b], world[a] - world[b]);
-        if (warped2 > limit2 && (region || warped2 > kStretch * kStretch * glm::dot(local[a] - local[b], local[a] - local[b])) &&
-            (!region || region->contains(0.5 * (world[a] + world[b]))) && eligible(a) && eligible(b))
-          long_edges.push_back(edge_key(a, b));
+        const double local2 = glm::dot(local[a] - local[b], local[a] - local[b]);
+        if (warped2 > limit2 && (region || warped2 > kStretch * kStretch * local2) &&
+            (!region || region->contains(0.5 * (world[a] + world[b]))) && eligible(a) && eligible(b)) {
+          if (local2 < shortest2)
+            s.stopped = true;
+          else
+            long_edges.push_back(edge_key(a, b));
+        }
       }
     std::sort(long_edges.begin(), long_edges.end());
     long_edges.erase(std::unique(long_edges.begin(), long_edges.end()), long_edges.end());

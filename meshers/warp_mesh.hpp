@@ -23,8 +23,9 @@ class TapeEvaluator;
 struct WarpRemeshStats {
   int passes = 0;
   std::size_t edges_split = 0;
-  /// A pass would have made more than max_triangles: refinement stopped there, and the mesh
-  /// returned is the last pass's, with edges still longer than max_edge.
+  /// A pass would have made more than max_triangles, or a long edge was already 32 times shorter
+  /// than max_edge in the child's space (the map stretches more than that there, or tears):
+  /// the mesh returned has edges still longer than max_edge.
   bool stopped = false;
 };
 
@@ -36,8 +37,9 @@ struct WarpRemeshStats {
 /// A null `child_field` leaves new vertices at the midpoints (for meshes with no one field of
 /// their own, such as a partial Boolean result). `warp` is called from several threads at once.
 /// With `only` (one flag per vertex of child_mesh), an edge is split only when both its ends are
-/// flagged or new. No pass makes more than `max_triangles` (WarpRemeshStats::stopped): a warp
-/// that stretches edges without end (a twist of 1e6 radians a unit) would fill memory.
+/// flagged or new. No pass makes more than `max_triangles`, and no edge shorter than max_edge / 32
+/// in the child's space is split (WarpRemeshStats::stopped): a warp that stretches edges without
+/// end (a twist of 1e6 radians a unit), or an ffd torn at its lattice box, would fill memory.
 TriangleMesh warp_mesh(const TriangleMesh& child_mesh, const std::function<glm::dvec3(const glm::dvec3&)>& warp,
                        const TapeEvaluator* child_field, double threshold, double max_edge,
                        WarpRemeshStats* stats = nullptr, const Aabb* region = nullptr,
