@@ -6,6 +6,7 @@
 #include "meshers/self_intersections.hpp"
 #include "meshers/sweep.hpp"
 #include "meshers/warp_mesh.hpp"
+#include "meshers/winding_surface.hpp"
 #include "nodes/mesh_leaf.hpp"
 #include "nodes/warps.hpp"
 #include "runtime/subtree_hash.hpp"
@@ -441,7 +442,14 @@ std::shared_ptr<const TriangleMesh> Runner::execute(const Job& job, NodeReport& 
       // above T (> 0), so its solid, and its mesh, is empty.
       if (leaf_strength(*g, n) < 0) return std::make_shared<const TriangleMesh>();
       return g->meshes[g->mesh[n]]->surface();
-    case JobStrategy::Global: return global(n, g, r, jobs_.size() == 1);
+    case JobStrategy::Global:
+      // A winding leaf whose triangles are its solid's surface all the same keeps them.
+      if (job.reason == JobReason::WindingLeaf && leaf_strength(*g, n) > 0 &&
+          winding_leaf_is_its_surface(*g->meshes[g->mesh[n]])) {
+        r.strategy = JobStrategy::SharedLeaf;
+        return g->meshes[g->mesh[n]]->surface();
+      }
+      return global(n, g, r, jobs_.size() == 1);
     case JobStrategy::Sweep: {
       // Held while it is built: the mesh's arrays (about 24 bytes a triangle) and their growth.
       const double triangles = sweep_triangle_estimate(*g, n, T, h);

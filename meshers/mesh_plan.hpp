@@ -56,6 +56,7 @@ enum class JobReason : std::uint8_t {
   HighOverlap,    ///< a blend with rho > blend_overlap
   NoLocalMethod,  ///< no local strategy for this node (n-ary Booleans, blends of many operands)
   WindingLeaf,    ///< a mesh leaf with "inside": "winding": its own mesh is not its solid's surface
+                  ///< (polygonized), unless it is after all (SharedLeaf: meshers/winding_surface.hpp)
   Fallback,       ///< the local strategy failed; see NodeReport::fallback_cause
 };
 const char* to_string(JobStrategy s);

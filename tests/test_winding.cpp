@@ -224,10 +224,13 @@ TEST(Winding, DefectTable) {
     }
     EXPECT_GT(judged, 500u);
     EXPECT_EQ(wrong, 0u) << "of " << judged;
-    // Meshing: the plan polygonizes the leaf; closed, oriented, manifold, about the volume.
+    // Meshing: the plan polygonizes the leaf (a flipped patch, turned back with its shell's
+    // majority, leaves the triangles the solid's surface: they are kept); closed, oriented,
+    // manifold, about the volume.
     const MeshResult r = mesh_tree(tree, test::mesh_options(0.02 * glm::length(leaf->bounds().size())));
     ASSERT_EQ(r.nodes.size(), 1u);
-    EXPECT_EQ(r.nodes[0].strategy, JobStrategy::Global);
+    const bool reoriented_only = row.name == "flipped patch";
+    EXPECT_EQ(r.nodes[0].strategy, reoriented_only ? JobStrategy::SharedLeaf : JobStrategy::Global);
     EXPECT_EQ(r.nodes[0].reason, JobReason::WindingLeaf);
     const MeshChecks checks = check_mesh(*r.mesh, false);
     EXPECT_TRUE(checks.watertight()) << checks.boundary_edges << " boundary, " << checks.nonmanifold_edges
@@ -235,6 +238,42 @@ TEST(Winding, DefectTable) {
     EXPECT_NEAR(checks.volume / row.volume, 1.0, 0.03) << checks.volume << " vs " << row.volume;
     std::printf("%s: %zu of %zu points judged, meshed %zu triangles, volume %.5f (intended %.5f)\n", row.name.c_str(),
                 judged - wrong, judged, checks.triangles, checks.volume, row.volume);
+  }
+}
+
+// A winding leaf whose triangles bound its solid after all (closed, manifold, crossing nowhere,
+// each shell with winding number 1 behind it and 0 in front) keeps them, as a closed leaf does;
+// polygonizing them cost knot2.off 15 s. A shell nested in another of the same orientation (w =
+// 2 inside it: no boundary of the solid), or two crossing, or a hole, are polygonized as before.
+TEST(Winding, ALeafThatIsItsOwnSurfaceKeepsItsTriangles) {
+  const Soup ball = icosphere(3, 0.5, dvec3(0.0)), small = icosphere(2, 0.2, dvec3(0.05, 0.0, 0.0));
+  Soup hollow = small;
+  for (auto& t : hollow.triangles) std::swap(t[1], t[2]);
+  const struct {
+    const char* name;
+    Soup soup;
+    bool own;
+  } rows[] = {
+      {"ball", ball, true},
+      {"two balls apart", merged(ball, icosphere(2, 0.3, dvec3(1.2, 0, 0))), true},
+      {"a hollow ball (inner shell inward)", merged(ball, hollow), true},
+      {"a ball in a ball, both outward", merged(ball, small), false},
+      {"two balls crossing", merged(ball, icosphere(2, 0.3, dvec3(0.6, 0, 0))), false},
+      {"a ball with a hole", holes(ball, {5}), false},
+  };
+  for (const auto& row : rows) {
+    SCOPED_TRACE(row.name);
+    const auto leaf = MeshLeaf::from_triangles(row.soup.positions, row.soup.triangles, row.name, false, MeshInside::Winding);
+    Builder b(0.5);
+    const Tree tree = b.build(b.mesh(leaf, {0.1, 1.0}));
+    const MeshResult r = mesh_tree(tree, test::mesh_options(0.05));
+    ASSERT_EQ(r.nodes.size(), 1u);
+    EXPECT_EQ(r.nodes[0].reason, JobReason::WindingLeaf);
+    EXPECT_EQ(r.nodes[0].strategy, row.own ? JobStrategy::SharedLeaf : JobStrategy::Global);
+    EXPECT_EQ(r.mesh == leaf->surface(), row.own);
+    const MeshChecks c = check_mesh(*r.mesh);
+    EXPECT_TRUE(c.watertight());
+    EXPECT_EQ(c.self_intersecting_pairs, 0u);
   }
 }
 
