@@ -9,6 +9,7 @@
 #include "nodes/mesh_leaf.hpp"
 #include "nodes/warps.hpp"
 #include "runtime/graph_writer.hpp"
+#include "runtime/node_params.hpp"
 
 #include <tbb/parallel_invoke.h>
 
@@ -35,9 +36,14 @@ bool needs_ffd_preparation(const Graph& g, NodeId root) {
   std::vector<std::uint8_t> seen(g.size(), 0);
   collect(g, root, seen);
   for (NodeId n = 0; n < g.size(); ++n)
-    if (seen[n] && g.kind[n] == NodeKind::Ffd && g.mesh[n] == kNone) return true;
+    if (seen[n] && params::ffd_unprepared(g, n)) return true;
   return false;
 }
+
+// Edges a lattice stretches more than this many times its median are across a tear (see
+// warp_mesh): a smooth lattice that stretches one part of the child 32 times more than the rest
+// is extreme, and its edges there stay long.
+constexpr double kFfdTearStretch = 32.0;
 
 std::shared_ptr<const MeshLeaf> deform_child_mesh(const std::shared_ptr<const Graph>& graph, NodeId n,
                                                   const TriangleMesh& child_mesh, double max_edge, double threshold,
@@ -51,7 +57,8 @@ std::shared_ptr<const MeshLeaf> deform_child_mesh(const std::shared_ptr<const Gr
     // are moved, so a strongly bent region is not spanned by long flat triangles that cut into
     // their neighbours.
     const TapeEvaluator child_field(std::make_shared<const Tape>(compile_tape(graph, g.children_of(n)[0], threshold)));
-    mesh = warp_mesh(child_mesh, forward_map(g, n), &child_field, threshold, max_edge);
+    mesh = warp_mesh(child_mesh, forward_map(g, n), &child_field, threshold, max_edge, nullptr, nullptr, {},
+                     std::numeric_limits<std::size_t>::max(), kFfdTearStretch);
   } else {
     mesh = child_mesh;
     const double* params = g.params_of(n).data();
@@ -99,6 +106,12 @@ std::shared_ptr<const MeshLeaf> deform_child_mesh(const std::shared_ptr<const Gr
 std::shared_ptr<const Graph> attach_ffd_mesh(const Graph& graph, NodeId n, std::shared_ptr<const MeshLeaf> leaf) {
   GraphWriter writer(graph);
   writer.attach_mesh(n, std::move(leaf));
+  return std::make_shared<const Graph>(writer.take());
+}
+
+std::shared_ptr<const Graph> attach_empty_ffd(const Graph& graph, NodeId n) {
+  GraphWriter writer(graph);
+  writer.empty_ffd(n);
   return std::make_shared<const Graph>(writer.take());
 }
 

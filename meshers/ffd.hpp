@@ -33,6 +33,10 @@ std::shared_ptr<const MeshLeaf> deform_child_mesh(const std::shared_ptr<const Gr
 /// A copy of `graph` in which ffd node `ffd` carries `leaf` (node ids unchanged, supports
 /// recomputed).
 std::shared_ptr<const Graph> attach_ffd_mesh(const Graph& graph, NodeId ffd, std::shared_ptr<const MeshLeaf> leaf);
+/// The same for an ffd whose child's solid is empty: nothing to deform, so its deformed mesh is
+/// empty and its field 0 everywhere (params::ffd_empty); an operand of a bigger tree, it adds
+/// nothing.
+std::shared_ptr<const Graph> attach_empty_ffd(const Graph& graph, NodeId ffd);
 
 /// The tree with every ffd under its root prepared at `precision`, each child meshed with the
 /// automatic strategy (runs the mesh plan's field jobs; returns the tree itself when nothing

@@ -50,12 +50,12 @@ TriangleMesh boolean_step(const LocalInput& in, NodeKind kind, BooleanOperand& a
   // A round halves the edges inside the crossing seams' box: at most four times the triangles
   // there. Where the operands lie on each other the box spans them and their slivers split
   // without end (847k triangles from 6k, then an intersection search of 15 GB); past eight
-  // times the operand, the Boolean is polygonized instead.
+  // times the operand's mesh as it stands (plus 65,536), the Boolean is polygonized instead.
   auto refine = [&](BooleanOperand& o, const Aabb& region, double edge) {
     const std::size_t before = o.shape.mesh().triangles.size();
     if (!o.shape.refine(region, edge, 8 * before + 65536))
-      throw LocalFailure("the seams still cross after refining the operands to " + std::to_string(edge) +
-                         ": they lie on each other");
+      throw LocalFailure("the seams still cross, and halving the operands' edges to " + std::to_string(edge) +
+                         " near them would take more than " + std::to_string(8 * before + 65536) + " triangles");
   };
   auto cut = [&](BooleanOperand& o, const BatchField& f) {
     TriangleMesh piece = cut_mesh(o.shape.mesh(), f, cut_options(in, true));
@@ -84,7 +84,8 @@ TriangleMesh boolean_step(const LocalInput& in, NodeKind kind, BooleanOperand& a
     // multiply (tests/data/stress/coincident_operands_4gb.json: 15 GB and two minutes before).
     if (crossing.size() > 64 + out.triangles.size() / 16)
       throw LocalFailure(std::to_string(crossing.size()) + " pairs of the result's " +
-                         std::to_string(out.triangles.size()) + " triangles cross: the operands lie on each other");
+                         std::to_string(out.triangles.size()) +
+                         " triangles cross: the operands lie on each other (or cross themselves)");
     if (!crossing.empty()) {
       std::vector<std::uint8_t> at(out.positions.size(), 0);
       for (const auto& pair : crossing)

@@ -9,6 +9,7 @@
 #include "meshers/winding_surface.hpp"
 #include "nodes/mesh_leaf.hpp"
 #include "nodes/warps.hpp"
+#include "runtime/node_params.hpp"
 #include "runtime/subtree_hash.hpp"
 #include "runtime/tape.hpp"
 #include "runtime/tape_eval.hpp"
@@ -133,7 +134,7 @@ class Planner {
   void ffds_under(NodeId n, std::vector<std::uint8_t>& seen, std::vector<std::uint32_t>& deps) {
     if (seen[n]) return;
     seen[n] = 1;
-    if (g_.kind[n] == NodeKind::Ffd && g_.mesh[n] == kNone) {
+    if (params::ffd_unprepared(g_, n)) {
       deps.push_back(need(n));
       return;
     }
@@ -155,7 +156,13 @@ class Planner {
       j.reason = r;
       return j;
     };
-    if (kind == NodeKind::Ffd) return set(g_.mesh[n] == kNone ? JobStrategy::DeformedChild : JobStrategy::SharedLeaf, JobReason::Kind);
+    if (kind == NodeKind::Ffd) {
+      if (params::ffd_unprepared(g_, n)) return set(JobStrategy::DeformedChild, JobReason::Kind);
+      // A deformed mesh that crosses itself is a winding leaf (meshers/ffd.hpp): polygonized.
+      if (g_.mesh[n] != kNone && g_.meshes[g_.mesh[n]]->inside_mode() == MeshInside::Winding)
+        return set(JobStrategy::Global, JobReason::WindingLeaf);
+      return set(JobStrategy::SharedLeaf, JobReason::Kind);
+    }
     if (want == MeshStrategy::Global) return set(JobStrategy::Global, why);
     switch (kind_family(kind)) {
       case Family::Mesh:
@@ -246,7 +253,7 @@ class Runner {
       : tree_(tree), o_(o), owned_budget_(o.polygonize.memory_budget),
         budget_(o.polygonize.budget ? *o.polygonize.budget : owned_budget_), graph_(tree.graph_ptr()),
         jobs_(std::move(jobs)), meshes_(jobs_.size()), reports_(jobs_.size()), errors_(jobs_.size()),
-        leaves_(jobs_.size()), consumers_(new std::atomic<std::uint32_t>[jobs_.size()]) {
+        leaves_(jobs_.size()), emptied_(jobs_.size(), 0), consumers_(new std::atomic<std::uint32_t>[jobs_.size()]) {
     for (std::uint32_t j = 0; j < jobs_.size(); ++j) consumers_[j] = 0;
     held_.assign(jobs_.size(), 0);
     for (const Job& job : jobs_)
@@ -268,6 +275,7 @@ class Runner {
     std::shared_ptr<const Graph> g = tree_.graph_ptr();
     for (std::uint32_t j = 0; j < jobs_.size(); ++j)
       if (leaves_[j]) g = attach_ffd_mesh(*g, jobs_[j].node, leaves_[j]);
+      else if (emptied_[j]) g = attach_empty_ffd(*g, jobs_[j].node);
     return g;
   }
 
@@ -302,6 +310,7 @@ class Runner {
   std::vector<NodeReport> reports_;
   std::vector<std::exception_ptr> errors_;
   std::vector<std::shared_ptr<const MeshLeaf>> leaves_;  // ffd jobs: their deformed meshes
+  std::vector<std::uint8_t> emptied_;                     // ffd jobs whose child was empty
   // With a cache: each job's key, and whether it may be cached (0: not computed, 1: yes, 2: no).
   std::vector<std::uint64_t> keys_;
   std::vector<std::uint8_t> cacheable_;
@@ -341,12 +350,14 @@ void Runner::run(std::uint32_t j) {
   try {
     if (!reuse(j, r)) {
       meshes_[j] = execute(job, r);
-      if (!cacheable_.empty() && cacheable_[j] == 1) o_.cache->insert(keys_[j], CachedJob{meshes_[j], r});
+      // A winding leaf found to be its own surface is shared, as a leaf's mesh is: not copied.
+      if (!cacheable_.empty() && cacheable_[j] == 1 && r.strategy != JobStrategy::SharedLeaf)
+        o_.cache->insert(keys_[j], CachedJob{meshes_[j], r});
     }
     r.triangles = meshes_[j]->triangles.size();
     // A job's mesh is held until the jobs that read it are done (the root's until the run
     // ends); a shared leaf's is the leaf's own, counted above.
-    if (job.strategy != JobStrategy::SharedLeaf) {
+    if (r.strategy != JobStrategy::SharedLeaf) {
       const std::size_t bytes = 24 * meshes_[j]->positions.size() + 12 * r.triangles;
       budget_.take(double(bytes), "the mesh of node " + graph_->label(job.node) + " (" + std::to_string(r.triangles) + " triangles)");
       held_[j] = bytes;
@@ -439,8 +450,8 @@ std::shared_ptr<const TriangleMesh> Runner::execute(const Job& job, NodeReport& 
   switch (job.strategy) {
     case JobStrategy::SharedLeaf:
       // A leaf of negative strength carves what it is blended with; alone its field is nowhere
-      // above T (> 0), so its solid, and its mesh, is empty.
-      if (leaf_strength(*g, n) < 0) return std::make_shared<const TriangleMesh>();
+      // above T (> 0), so its solid, and its mesh, is empty; so is an empty ffd's (strength 0).
+      if (leaf_strength(*g, n) <= 0) return std::make_shared<const TriangleMesh>();
       return g->meshes[g->mesh[n]]->surface();
     case JobStrategy::Global:
       // A winding leaf whose triangles are its solid's surface all the same keeps them.
@@ -483,6 +494,12 @@ std::shared_ptr<const TriangleMesh> Runner::execute(const Job& job, NodeReport& 
       return unless_crossing(std::move(mesh), "the warped mesh", n, g, r);
     }
     case JobStrategy::DeformedChild: {
+      if (input(job, 0).triangles.empty()) {  // nothing to deform: the node's field is 0
+        std::lock_guard lock(graph_mutex_);
+        graph_ = attach_empty_ffd(*graph_, n);
+        emptied_[std::size_t(&job - jobs_.data())] = 1;
+        return std::make_shared<const TriangleMesh>();
+      }
       std::size_t crossing = 0;
       auto leaf = deform_child_mesh(g, n, input(job, 0), 1.5 * h, T, &crossing);
       std::shared_ptr<const Graph> attached;

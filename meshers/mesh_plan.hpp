@@ -116,7 +116,7 @@ struct MeshResult {
   std::optional<Tree> tree;
 };
 
-/// Meshes the tree's root. Throws PolygonizeError (an unbounded solid, an empty ffd child),
+/// Meshes the tree's root. Throws PolygonizeError (an unbounded solid),
 /// MemoryBudgetError (a stage that would pass the budget, before it allocates), MeshCancelled,
 /// CompileError. Calls on one Tree from several threads are
 /// independent (each run compiles its own tapes; the tree is only read).

@@ -9,6 +9,8 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
+#include <limits>
 #include <span>
 #include <unordered_map>
 #include <vector>
@@ -19,11 +21,23 @@ namespace {
 constexpr int kMaxPasses = 10;
 constexpr int kNewtonSteps = 3;
 constexpr double kStretch = 1.01;  // an edge the warp lengthens by more than this is stretched
-// An edge this many times shorter than max_edge in the child's space is not split: where the map
-// stretches more than that (or jumps: an ffd whose lattice's outer control points are moved
-// tears the child at the lattice box, where points outside are unmoved) the halves of an edge
-// come out as long as the edge, and every pass doubled the edges across the tear.
-constexpr double kMaxStretch = 32.0;
+
+// The median of the warp's stretch (warped over child length) over the child's edges.
+double median_stretch(const std::vector<glm::dvec3>& local, const std::vector<glm::dvec3>& world,
+                      const std::vector<glm::uvec3>& tris) {
+  std::vector<double> stretch;
+  stretch.reserve(3 * tris.size());
+  for (const auto& t : tris)
+    for (int k = 0; k < 3; ++k) {
+      const std::uint32_t a = t[k], b = t[(k + 1) % 3];
+      const double l = glm::length(local[a] - local[b]);
+      if (l > 0) stretch.push_back(glm::length(world[a] - world[b]) / l);
+    }
+  if (stretch.empty()) return 1.0;
+  auto mid = stretch.begin() + std::ptrdiff_t(stretch.size() / 2);
+  std::nth_element(stretch.begin(), mid, stretch.end());
+  return *mid;
+}
 
 std::uint64_t edge_key(std::uint32_t a, std::uint32_t b) {
   return (std::uint64_t(std::min(a, b)) << 32) | std::uint64_t(std::max(a, b));
@@ -61,7 +75,8 @@ std::function<glm::dvec3(const glm::dvec3&)> forward_map(const Graph& graph, Nod
 
 TriangleMesh warp_mesh(const TriangleMesh& child, const std::function<glm::dvec3(const glm::dvec3&)>& warp,
                        const TapeEvaluator* field, double T, double max_edge, WarpRemeshStats* stats,
-                       const Aabb* region, std::span<const std::uint8_t> only, std::size_t max_triangles) {
+                       const Aabb* region, std::span<const std::uint8_t> only, std::size_t max_triangles,
+                       double max_relative_stretch) {
   auto eligible = [&](std::uint32_t v) { return only.empty() || v >= only.size() || only[v] != 0; };
   std::vector<glm::dvec3> local = child.positions;  // child space
   std::vector<glm::uvec3> tris = child.triangles;
@@ -69,7 +84,12 @@ TriangleMesh warp_mesh(const TriangleMesh& child, const std::function<glm::dvec3
   // An ffd's warp (a trivariate Bernstein sum) costs more than the rest of this function.
   tbb::parallel_for(std::size_t(0), local.size(), [&](std::size_t i) { world[i] = warp(local[i]); });
   WarpRemeshStats s;
-  const double limit2 = max_edge * max_edge, shortest2 = limit2 / (kMaxStretch * kMaxStretch);
+  const double limit2 = max_edge * max_edge;
+  // Across a tear, halving an edge leaves a half as long as the edge: its stretch doubles each
+  // pass, and such edges are left as they are past max_relative_stretch times the median's.
+  const double tear = std::isfinite(max_relative_stretch) ? max_relative_stretch * median_stretch(local, world, tris)
+                                                          : std::numeric_limits<double>::infinity();
+  const double tear2 = tear * tear;
   for (int pass = 0; pass < kMaxPasses; ++pass) {
     // Edges too long after warping, each once, in a deterministic order.
     std::vector<std::uint64_t> long_edges;
@@ -82,8 +102,8 @@ TriangleMesh warp_mesh(const TriangleMesh& child, const std::function<glm::dvec3
         const double local2 = glm::dot(local[a] - local[b], local[a] - local[b]);
         if (warped2 > limit2 && (region || warped2 > kStretch * kStretch * local2) &&
             (!region || region->contains(0.5 * (world[a] + world[b]))) && eligible(a) && eligible(b)) {
-          if (local2 < shortest2)
-            s.stopped = true;
+          if (warped2 > tear2 * local2)
+            s.torn = true;
           else
             long_edges.push_back(edge_key(a, b));
         }

@@ -23,10 +23,12 @@ class TapeEvaluator;
 struct WarpRemeshStats {
   int passes = 0;
   std::size_t edges_split = 0;
-  /// A pass would have made more than max_triangles, or a long edge was already 32 times shorter
-  /// than max_edge in the child's space (the map stretches more than that there, or tears):
-  /// the mesh returned has edges still longer than max_edge.
+  /// A pass would have made more than max_triangles: refinement stopped there, and the mesh
+  /// returned is the last pass's, with edges still longer than max_edge.
   bool stopped = false;
+  /// Some long edges were left unsplit, stretched more than max_relative_stretch times the
+  /// median stretch (a tear).
+  bool torn = false;
 };
 
 /// Moves child_mesh (in the child's space) by `warp` and splits edges longer than max_edge after
@@ -37,14 +39,18 @@ struct WarpRemeshStats {
 /// A null `child_field` leaves new vertices at the midpoints (for meshes with no one field of
 /// their own, such as a partial Boolean result). `warp` is called from several threads at once.
 /// With `only` (one flag per vertex of child_mesh), an edge is split only when both its ends are
-/// flagged or new. No pass makes more than `max_triangles`, and no edge shorter than max_edge / 32
-/// in the child's space is split (WarpRemeshStats::stopped): a warp that stretches edges without
-/// end (a twist of 1e6 radians a unit), or an ffd torn at its lattice box, would fill memory.
+/// flagged or new. No pass makes more than `max_triangles` (WarpRemeshStats::stopped): a warp
+/// that stretches edges without end (a twist of 1e6 radians a unit) would fill memory. An edge
+/// the warp stretches more than `max_relative_stretch` times the median over the child's edges is
+/// not split (WarpRemeshStats::torn): where a map jumps (an ffd whose lattice's outer control
+/// points are moved tears the child at the lattice box, outside which points stay), halving
+/// leaves a half as long as the edge, and ten passes filled the tear with slivers.
 TriangleMesh warp_mesh(const TriangleMesh& child_mesh, const std::function<glm::dvec3(const glm::dvec3&)>& warp,
                        const TapeEvaluator* child_field, double threshold, double max_edge,
                        WarpRemeshStats* stats = nullptr, const Aabb* region = nullptr,
                        std::span<const std::uint8_t> only = {},
-                       std::size_t max_triangles = std::numeric_limits<std::size_t>::max());
+                       std::size_t max_triangles = std::numeric_limits<std::size_t>::max(),
+                       double max_relative_stretch = std::numeric_limits<double>::infinity());
 
 /// The forward map of warp node `node` (affine, twist, taper, bend or ffd).
 std::function<glm::dvec3(const glm::dvec3&)> forward_map(const Graph& graph, NodeId node);

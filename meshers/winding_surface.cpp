@@ -28,19 +28,27 @@ bool winding_leaf_is_its_surface(const MeshLeaf& leaf) {
     const std::uint32_t s = shells.find(t[0]);
     if (area > largest[s]) largest[s] = area, pick[s] = i;
   }
-  // A step of a thousandth of the triangle's size off its centroid: a shell nearer than that on
-  // either side, or the shell itself folded back that close, shows as a wrong winding number
-  // and only costs the polygonization.
+  // The winding number a step off the triangle's centroid on either side, the step short enough
+  // that nothing else lies within it: the nearest triangle to each end is then no nearer than the
+  // step, as it would be were another surface crossed on the way (a plate a hair inside a wall).
   const WindingTree winding(m.positions, m.triangles);
   for (std::uint32_t s = 0; s < m.positions.size(); ++s) {
     if (largest[s] < 0) continue;
     const glm::uvec3& t = m.triangles[pick[s]];
     const glm::dvec3 a = m.positions[t[0]], b = m.positions[t[1]], c = m.positions[t[2]];
     const glm::dvec3 normal = glm::normalize(glm::cross(b - a, c - a)), centre = (a + b + c) / 3.0;
-    const double step = 1e-3 * std::sqrt(0.5 * largest[s]);
-    const double behind = winding.estimate(centre - step * normal, 0.0, 1e-3).w;
-    const double ahead = winding.estimate(centre + step * normal, 0.0, 1e-3).w;
-    if (!(std::abs(behind - 1.0) < 0.25 && std::abs(ahead) < 0.25)) return false;
+    bool checked = false;
+    for (const double fraction : {1e-3, 1e-5, 1e-7}) {
+      const double step = fraction * std::sqrt(0.5 * largest[s]);
+      const glm::dvec3 behind = centre - step * normal, ahead = centre + step * normal;
+      if (!(leaf.query(behind, 2.0 * step).distance >= 0.999 * step && leaf.query(ahead, 2.0 * step).distance >= 0.999 * step))
+        continue;
+      const double w_behind = winding.estimate(behind, 0.0, 1e-3).w, w_ahead = winding.estimate(ahead, 0.0, 1e-3).w;
+      if (!(std::abs(w_behind - 1.0) < 0.25 && std::abs(w_ahead) < 0.25)) return false;
+      checked = true;
+      break;
+    }
+    if (!checked) return false;
   }
   return true;
 }

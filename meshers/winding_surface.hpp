@@ -14,9 +14,10 @@ namespace ht {
 /// True when `leaf`'s triangles bound {w > 1/2} exactly: closed, manifold, consistently oriented
 /// and without degenerate triangles (check_watertight), crossing nowhere (exact predicates:
 /// meshers/self_intersections.hpp), and every shell has winding number 1 just behind its largest
-/// triangle and 0 just in front of it (so no shell is turned inward into a solid, nor nested in
-/// another of the same orientation, where w would be 2 or -1 and the shell no boundary). For a
-/// closed leaf, true as well. O(n log n); thread-safe.
+/// triangle and 0 just in front of it, a step off that no other triangle comes within (so no
+/// shell is turned inward into a solid, nor nested in another of the same orientation, where w
+/// would be 2 or -1 and the shell no boundary). For a closed leaf, true as well. O(n log n);
+/// thread-safe.
 bool winding_leaf_is_its_surface(const MeshLeaf& leaf);
 
 }  // namespace ht

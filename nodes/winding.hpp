@@ -48,8 +48,10 @@ class WindingTree {
                    ///< meets a triangle's bounding sphere (no bound then)
   };
   /// The hierarchical estimate at p, valid over the ball of radius rho >= 0 about p, with error
-  /// budget tau >= 0 (tau = 0: the exact sum at p).
-  Estimate estimate(const glm::dvec3& p, double rho, double tau) const;
+  /// budget tau >= 0 (tau = 0: the exact sum at p). With opening > 0, a node whose triangles lie
+  /// at least opening times its radius beyond the ball is expanded too, whatever the budget: the
+  /// bound is as rigorous, but no longer held to tau.
+  Estimate estimate(const glm::dvec3& p, double rho, double tau, double opening = 0.0) const;
   /// The exact sum over every triangle (the reference; O(n)).
   double exact(const glm::dvec3& p) const;
   /// w(p) > 1/2, decided exactly (see the top of this file). A non-finite p is outside.
@@ -58,7 +60,8 @@ class WindingTree {
   /// be certified cheaply (the box is near the triangles or the 1/2 level set).
   int box_side(const Aabb& box) const;
 
-  static constexpr double kTau = 0.25;  ///< inside()'s first error budget
+  static constexpr double kTau = 0.25;      ///< inside()'s error budget after its first try
+  static constexpr double kOpening = 2.0;   ///< inside()'s first try: estimate(p, 0, 0, kOpening)
   std::size_t bytes() const;
 
  private:

@@ -8,6 +8,8 @@
 #include "runtime/node_params.hpp"
 
 #include <cstring>
+#include <stdexcept>
+#include <string>
 
 namespace ht {
 
@@ -100,6 +102,12 @@ void GraphWriter::attach_mesh(NodeId n, std::shared_ptr<const MeshLeaf> leaf) {
   compute_supports(graph_);  // the ffd's support changes, and with it its ancestors'
 }
 
+void GraphWriter::empty_ffd(NodeId n) {
+  if (graph_.kind.at(n) != NodeKind::Ffd) throw std::invalid_argument("empty_ffd: node " + std::to_string(n) + " is no ffd");
+  graph_.params.at(graph_.param_begin.at(n) + kFfdHeader - 1) = 0.0;
+  compute_supports(graph_);
+}
+
 void GraphWriter::set_name(NodeId n, std::string name) {
   graph_.name.at(n) = static_cast<std::uint32_t>(graph_.names.size());
   graph_.names.push_back(std::move(name));
@@ -152,7 +160,9 @@ void compute_support(Graph& g, NodeId n) {
         case Family::Warp:
           if (k == NodeKind::Ffd) {  // its field lives on its deformed mesh, once meshed
             const params::Ffd f = params::ffd(g, n);
-            box = g.mesh[n] != kNone ? g.meshes[g.mesh[n]]->bounds().expanded(f.R) : Aabb::everything();
+            box = g.mesh[n] != kNone ? g.meshes[g.mesh[n]]->bounds().expanded(f.R)
+                  : f.F == 0.0       ? Aabb{}  // prepared, empty: 0 everywhere
+                                     : Aabb::everything();
             nonneg = f.F > 0.0;
           } else {
             box = warp_bounds(k, p.data(), sup(c[0], below));

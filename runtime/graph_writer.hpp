@@ -34,6 +34,9 @@ class GraphWriter {
   NodeId copy(const Graph& from, NodeId n, std::span<const NodeId> children);
   /// Gives node n (a prepared ffd) its deformed mesh, and updates its support.
   void attach_mesh(NodeId n, std::shared_ptr<const MeshLeaf> leaf);
+  /// Marks node n (an ffd whose child's solid is empty) as prepared with an empty deformed mesh:
+  /// its field is 0 everywhere (params::ffd_empty), and its support empty.
+  void empty_ffd(NodeId n);
 
   void set_name(NodeId n, std::string name);
   void set_mesher(NodeId n, MesherHint hint) { graph_.mesher.at(n) = hint; }

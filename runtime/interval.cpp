@@ -220,7 +220,7 @@ Aabb solid_bounds(const Graph& g, NodeId n, double T, bool under_blend) {
     case NodeKind::Taper:
     case NodeKind::Bend: return warp_bounds(g.kind[n], g.params_of(n).data(), child(0, under_blend));
     case NodeKind::Ffd: {
-      if (g.mesh[n] != kNone) return support;
+      if (g.mesh[n] != kNone || params::ffd_empty(g, n)) return support;
       // Inside the lattice, points move within the control points' box; outside, not at all.
       const auto p = g.params_of(n);
       Aabb box = child(0, under_blend);

@@ -60,6 +60,15 @@ inline Ffd ffd(const Graph& g, NodeId node) {
   return {Aabb{{p[0], p[1], p[2]}, {p[3], p[4], p[5]}}, int(p[6]), int(p[7]), int(p[8]), p[9], p[10],
           p.subspan(kFfdHeader)};
 }
+/// An ffd whose child's solid is empty: its deformed mesh is empty and its field 0 everywhere.
+/// The mesh plan marks it by a strength of 0 (GraphWriter::empty_ffd), which no scene may say.
+inline bool ffd_empty(const Graph& g, NodeId n) {
+  return g.kind[n] == NodeKind::Ffd && g.mesh[n] == kNone && g.params_of(n)[kFfdHeader - 1] == 0.0;
+}
+/// An ffd that still waits for its deformed mesh (meshers/ffd.hpp).
+inline bool ffd_unprepared(const Graph& g, NodeId n) {
+  return g.kind[n] == NodeKind::Ffd && g.mesh[n] == kNone && !ffd_empty(g, n);
+}
 
 /// Twist, taper and bend share axis and centre; then twist: rate; taper: h0 h1 s0 s1;
 /// bend: h0 h1 rate.

@@ -124,6 +124,7 @@ class Compiler {
       case Family::Mesh: return mesh(n, frame);
       case Family::Warp:
         if (k == NodeKind::Ffd && g_.mesh[n] != kNone) return mesh(n, frame);  // its deformed mesh
+        if (params::ffd_empty(g_, n)) return kNoValue;                          // 0 everywhere
         return warp(n, frame, under_blend, region, depth);
       case Family::Operator: break;
     }

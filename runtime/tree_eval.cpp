@@ -60,6 +60,7 @@ double reference_field(const Graph& g, NodeId n, double T, const glm::dvec3& p, 
     case NodeKind::Bend:
       return child(0, warp_inverse(k, prm.data(), p), under_blend);
     case NodeKind::Ffd:
+      if (params::ffd_empty(g, n)) return 0.0;
       if (g.mesh[n] == kNone)
         throw EvalError("ffd node " + g.label(n) +
                         ": its field is the distance to its deformed mesh, which needs meshing first (meshers/ffd.hpp)");
@@ -144,7 +145,7 @@ ValueGradient value_gradient(const Graph& g, NodeId n, double T, const glm::dvec
       return {s.value, s.gradient};
     }
     case NodeKind::Ffd: {
-      if (g.mesh[n] == kNone) return {reference_field(g, n, T, p, under_blend), glm::dvec3(0.0)};  // throws
+      if (g.mesh[n] == kNone) return {reference_field(g, n, T, p, under_blend), glm::dvec3(0.0)};  // 0, or throws
       const MeshFieldSample s = mesh_field_gradient(*g.meshes[g.mesh[n]], params::mesh_field(g, n, T), p);
       return {s.value, s.gradient};
     }

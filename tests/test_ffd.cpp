@@ -91,6 +91,39 @@ TEST(Ffd, TapeAndTreeAgreeOnPreparedFfd) {
   EXPECT_TRUE(c.watertight());
 }
 
+// An ffd of a child whose solid is empty (a primitive weaker than the threshold alone) deforms
+// nothing: its field is 0 everywhere, so beside another operand the result is that operand's, and
+// alone it is empty. The run used to stop ("its child's surface is empty").
+TEST(Ffd, AnEmptyChildDeformsToNothing) {
+  test::Rng rng(72);
+  Builder b(kT);
+  const dvec3 lo(-0.8, -0.8, -0.8), hi(0.8, 0.8, 0.8);
+  auto pts = linear_lattice(lo, hi, {1, 1, 1}, {1, 1, 1});
+  pts[7] += dvec3(0.2, 0.1, 0.0);
+  const NodeId ffd = b.ffd(b.point({0, 0, 0}, {0.6, 0.4}), lo, hi, {1, 1, 1}, pts, {0.15, 1.0});
+  const NodeId ball = b.point({1.2, 0, 0}, {0.6});
+  const Tree both = b.build(b.blend({ffd, ball}));
+  const Tree alone = b.build(ffd), ball_alone = b.build(ball);
+  const Tree t = prepare_ffd(both, 0.03);
+  std::vector<dvec3> q(2000);
+  for (auto& p : q) p = test::random_point(rng, 1.5);
+  std::vector<double> tape(q.size()), ref(q.size());
+  t.field(q, tape);
+  ball_alone.field(q, ref);
+  for (std::size_t i = 0; i < q.size(); ++i) {
+    EXPECT_EQ(tape[i], ref[i]) << i;
+    EXPECT_EQ(t.reference(q[i]), ball_alone.reference(q[i])) << i;
+  }
+  MeshOptions mo;
+  mo.precision = 0.03;
+  const MeshResult with = mesh_tree(both, mo), ball_only = mesh_tree(ball_alone, mo), none = mesh_tree(alone, mo);
+  const MeshChecks c = check_mesh(*with.mesh), c0 = check_mesh(*ball_only.mesh);
+  EXPECT_TRUE(c.watertight());
+  EXPECT_EQ(c.components, 1u);
+  EXPECT_NEAR(c.volume / c0.volume, 1.0, 0.01);
+  EXPECT_TRUE(none.mesh->triangles.empty());
+}
+
 TEST(Ffd, PointsOutsideTheLatticeDoNotMove) {
   Builder b(kT);
   const dvec3 lo(0, 0, 0), hi(1, 1, 1);
@@ -173,6 +206,11 @@ TEST(Ffd, CrossingShellsTheLatticeMakesArePolygonized) {
   EXPECT_TRUE(c.watertight());
   EXPECT_EQ(c.self_intersecting_pairs, 0u);
   EXPECT_GT(c.triangles, 0u);
+  // Meshed again from the prepared tree, whose ffd carries the winding leaf: polygonized again,
+  // not the crossing mesh as a shared leaf.
+  const MeshResult again = mesh_tree(*r.tree, mo);
+  EXPECT_EQ(again.nodes.back().strategy, JobStrategy::Global);
+  EXPECT_EQ(check_mesh(*again.mesh).self_intersecting_pairs, 0u);
 }
 
 // A lattice whose outer control points are moved tears the child where it leaves the lattice

@@ -162,6 +162,14 @@ TEST(MeshPlan, AWarpThatStretchesWithoutEndIsPolygonized) {
   EXPECT_NE(s.nodes.back().reason, JobReason::Fallback) << s.nodes.back().fallback_cause;
   EXPECT_GT(s.mesh->triangles.size(), 64 * coarse.triangles.size());
   EXPECT_TRUE(check_mesh(*s.mesh).watertight());
+  // Scaled 80 times, the leaf's edges halve until they are 80 times shorter than the limit in
+  // its own space: the ffd's tear rule (edges stretched 32 times more than the median are left
+  // long) must not stop a uniform stretch, which sent this to the global polygonizer.
+  const Tree big = b2.build(b2.affine(b2.mesh(leaf, {0.1}), glm::scale(glm::dmat4(1.0), glm::dvec3(80.0))));
+  const MeshResult m = mesh_tree(big, test::mesh_options(2.0));
+  EXPECT_EQ(m.nodes.back().strategy, JobStrategy::WarpedChild) << m.nodes.back().fallback_cause;
+  EXPECT_GT(m.nodes.back().edges_split, 0u);
+  EXPECT_TRUE(check_mesh(*m.mesh).watertight());
 }
 
 // Random trees under a stretching warp: the warped child's split edges get midpoints projected
