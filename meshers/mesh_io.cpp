@@ -42,7 +42,23 @@ void to_openmesh(const TriangleMesh& mesh, TriMeshHolder& out) {
   for (const auto& t : mesh.triangles) m.add_face(vh[t[0]], vh[t[1]], vh[t[2]]);
 }
 
-void write_mesh(const TriangleMesh& mesh, const std::filesystem::path& file) {
+std::filesystem::path output_target(const std::filesystem::path& file) {
+  std::error_code ec;
+  std::filesystem::path target = file;
+  // Link by link (a dangling link's target is to be made): at most 40, as the kernel allows.
+  for (int hops = 0; std::filesystem::is_symlink(std::filesystem::symlink_status(target, ec)); ++hops) {
+    const std::filesystem::path next = std::filesystem::read_symlink(target, ec);
+    if (ec || hops == 40) throw MeshWriteError(file.string() + ": cannot follow the link" + (ec ? ": " + ec.message() : ""));
+    target = next.is_absolute() ? next : target.parent_path() / next;
+  }
+  const auto st = std::filesystem::status(target, ec);
+  if (std::filesystem::exists(st) && !std::filesystem::is_regular_file(st) && !std::filesystem::is_directory(st))
+    throw MeshWriteError(file.string() + ": is not a regular file (a device or a pipe); write to a file");
+  return target;
+}
+
+void write_mesh(const TriangleMesh& mesh, const std::filesystem::path& requested) {
+  const std::filesystem::path file = output_target(requested);
   if (!supported_mesh_extension(file))
     throw MeshWriteError(file.string() + ": unsupported extension (use .ply, .obj, .off or .stl)");
   const std::filesystem::path dir = file.parent_path().empty() ? std::filesystem::path(".") : file.parent_path();

@@ -17,6 +17,12 @@ struct MeshWriteError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+/// Where a write to `file` lands: a symbolic link's final target, so that the rename replaces
+/// the file and not the link, or the path itself. Throws MeshWriteError when that exists and is
+/// not a regular file (a device such as /dev/full, a pipe): a rename over it would replace it
+/// with a file (as root, /dev/full itself).
+std::filesystem::path output_target(const std::filesystem::path& file);
+
 /// True for the extensions write_mesh() accepts.
 bool supported_mesh_extension(const std::filesystem::path& file);
 

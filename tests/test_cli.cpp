@@ -165,8 +165,9 @@ TEST(Cli, MeshRefusesCleanlyAndLeavesNoFile) {
   EXPECT_EQ(quality.code, 2);
   EXPECT_NE(quality.err.find("over the memory budget"), std::string::npos) << quality.err;
   EXPECT_NE(quality.err.find("--memory-budget"), std::string::npos) << quality.err;
+  // Outputs are checked before meshing, as arguments (exit 1, after the meshing, before).
   const auto folder = test::run_cli("mesh " + s + " -o " + (dir / "no" / "m.ply").string() + " --precision 0.1");
-  EXPECT_EQ(folder.code, 1);
+  EXPECT_EQ(folder.code, 2);
   EXPECT_NE(folder.err.find("does not exist"), std::string::npos) << folder.err;
   // Precisions that are no number, or coarser than the whole scene.
   for (const char* p : {"nan", "inf", "-0.1"}) {
@@ -195,8 +196,27 @@ TEST(Cli, MeshRefusesCleanlyAndLeavesNoFile) {
   EXPECT_EQ(files, 3u);
   std::filesystem::create_directory(dir / "d.ply");
   const auto onto = test::run_cli("mesh " + s + " -o " + (dir / "d.ply").string() + " --precision 0.1");
-  EXPECT_EQ(onto.code, 1);
+  EXPECT_EQ(onto.code, 2);
   EXPECT_NE(onto.err.find("d.ply: is a folder, not a file"), std::string::npos) << onto.err;
+  // A stats file that cannot be written leaves no mesh behind; a device is not renamed over
+  // (run as root, --stats-json /dev/full replaced the device with a file and exited 0).
+  const auto stats = test::run_cli("mesh " + s + " -o " + (dir / "st.ply").string() + " --precision 0.1 --stats-json " +
+                                   (dir / "no" / "s.json").string());
+  EXPECT_EQ(stats.code, 2);
+  EXPECT_FALSE(std::filesystem::exists(dir / "st.ply"));
+  if (std::filesystem::is_character_file("/dev/full")) {
+    const auto full = test::run_cli("mesh " + s + " -o " + (dir / "f.ply").string() + " --precision 0.1 --stats-json /dev/full");
+    EXPECT_EQ(full.code, 2);
+    EXPECT_NE(full.err.find("is not a regular file"), std::string::npos) << full.err;
+    EXPECT_TRUE(std::filesystem::is_character_file("/dev/full"));
+    EXPECT_FALSE(std::filesystem::exists(dir / "f.ply"));
+  }
+  // A link is written through: the link stays, its target gets the mesh.
+  std::filesystem::create_symlink(dir / "target.ply", dir / "link.ply");
+  const auto link = test::run_cli("mesh " + s + " -o " + (dir / "link.ply").string() + " --precision 0.1");
+  EXPECT_EQ(link.code, 0) << link.err;
+  EXPECT_TRUE(std::filesystem::is_symlink(dir / "link.ply"));
+  EXPECT_GT(std::filesystem::file_size(dir / "target.ply"), 0u);
   const auto empty = test::run_cli("mesh " + write_scene(dir, "e.json", R"({"hybridtree": 1, "root": {"type": "point",
       "center": [0,0,0], "radius": 1, "strength": 0.3}})") + " -o " + (dir / "e.ply").string());
   EXPECT_EQ(empty.code, 0) << empty.err;

@@ -1,5 +1,6 @@
 #include "tools/cli_io.hpp"
 
+#include "meshers/mesh_io.hpp"
 #include "runtime/tape.hpp"
 
 #include <glm/geometric.hpp>
@@ -70,7 +71,13 @@ std::string format_rows(std::span<const double> table, std::size_t columns) {
   return out;
 }
 
-void write_file_atomically(const std::string& file, std::string_view bytes, const std::string& what) {
+void write_file_atomically(const std::string& requested, std::string_view bytes, const std::string& what) {
+  std::string file;
+  try {
+    file = output_target(requested).string();
+  } catch (const MeshWriteError& e) {
+    throw InputError(e.what());
+  }
   if (std::filesystem::is_directory(file)) throw InputError(file + ": is a folder, not a file");
   // The process id keeps two runs writing the same file from sharing a temporary.
   const std::string tmp = file + ".partial-" + std::to_string(::getpid());

@@ -251,9 +251,24 @@ std::function<void(double)> progress_bar() {
   };
 }
 
+// Both outputs are checked before meshing: a stats file that cannot be written must not leave
+// the mesh written alone, nor a device be renamed over (meshers/mesh_io.hpp output_target).
+void check_output(const std::string& file) {
+  try {
+    const std::filesystem::path target = ht::output_target(file);
+    const std::filesystem::path dir = target.parent_path().empty() ? std::filesystem::path(".") : target.parent_path();
+    if (!std::filesystem::is_directory(dir)) throw InputError(file + ": folder " + dir.string() + " does not exist");
+    if (std::filesystem::is_directory(target)) throw InputError(file + ": is a folder, not a file");
+  } catch (const ht::MeshWriteError& e) {
+    throw InputError(e.what());
+  }
+}
+
 int cmd_mesh(const MeshArgs& a) {
   if (!ht::supported_mesh_extension(a.out))
     throw InputError(a.out + ": unsupported output extension (use .ply, .obj, .off or .stl)");
+  check_output(a.out);
+  if (!a.stats_json.empty()) check_output(a.stats_json);
   using clock = std::chrono::steady_clock;
   const auto t0 = clock::now();
   const ht::Tree tree = ht::cli::load_tree(a.scene, a.optimize);
@@ -305,6 +320,13 @@ int cmd_mesh(const MeshArgs& a) {
               a.out.c_str(), checks.triangles, checks.vertices, run.options.precision, run.mesh_seconds,
               ht::root_strategy(run, tree.root()).c_str(), checks.watertight() ? "closed manifold" : "NOT watertight",
               checks.genus);
+  // Every mesher aims at none of these; where one is left, say so rather than let the summary
+  // line's "closed manifold" stand for a clean mesh.
+  if (checks.self_intersecting_pairs > 0 || checks.folded_triangles > 0)
+    std::fprintf(stderr,
+                 "hybridtree: warning: %s: the mesh has %zu self-intersecting triangle pairs and %zu folded triangles "
+                 "(a finer --precision may resolve the features that made them)\n",
+                 a.out.c_str(), checks.self_intersecting_pairs, checks.folded_triangles);
   for (const ht::NodeReport& e : run.result.nodes)
     for (const std::string& why : e.refinements)
       std::fprintf(stderr, "hybridtree: note: node %u: the grid at %s; polygonized again with cells %g%% smaller\n", e.node,
