@@ -44,6 +44,11 @@ void to_openmesh(const TriangleMesh& mesh, TriMeshHolder& out) {
 
 std::filesystem::path output_target(const std::filesystem::path& file) {
   std::error_code ec;
+  // What the path names, links followed as the kernel follows them: /dev/stdout and
+  // /proc/self/fd/N name a pipe through links whose text ("pipe:[N]") is no path.
+  const auto named = std::filesystem::status(file, ec);
+  if (std::filesystem::exists(named) && !std::filesystem::is_regular_file(named) && !std::filesystem::is_directory(named))
+    throw MeshWriteError(file.string() + ": is not a regular file (a device or a pipe); write to a file");
   std::filesystem::path target = file;
   // Link by link (a dangling link's target is to be made): at most 40, as the kernel allows.
   for (int hops = 0; std::filesystem::is_symlink(std::filesystem::symlink_status(target, ec)); ++hops) {
@@ -58,9 +63,10 @@ std::filesystem::path output_target(const std::filesystem::path& file) {
 }
 
 void write_mesh(const TriangleMesh& mesh, const std::filesystem::path& requested) {
+  // The format is the requested name's; a link only says where the file goes.
+  if (!supported_mesh_extension(requested))
+    throw MeshWriteError(requested.string() + ": unsupported extension (use .ply, .obj, .off or .stl)");
   const std::filesystem::path file = output_target(requested);
-  if (!supported_mesh_extension(file))
-    throw MeshWriteError(file.string() + ": unsupported extension (use .ply, .obj, .off or .stl)");
   const std::filesystem::path dir = file.parent_path().empty() ? std::filesystem::path(".") : file.parent_path();
   if (!std::filesystem::is_directory(dir)) throw MeshWriteError(file.string() + ": folder " + dir.string() + " does not exist");
   if (std::filesystem::is_directory(file)) throw MeshWriteError(file.string() + ": is a folder, not a file");
@@ -69,7 +75,7 @@ void write_mesh(const TriangleMesh& mesh, const std::filesystem::path& requested
   if (holder.mesh.n_faces() != mesh.triangles.size())
     throw MeshWriteError(file.string() + ": the mesh is not a manifold OpenMesh can hold (" +
                          std::to_string(mesh.triangles.size() - holder.mesh.n_faces()) + " faces rejected)");
-  const std::string ext = lower_extension(file);
+  const std::string ext = lower_extension(requested);
   OpenMesh::IO::Options options;
   if (ext == ".ply" || ext == ".stl") options += OpenMesh::IO::Options::Binary;
   std::random_device rd;

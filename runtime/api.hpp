@@ -86,7 +86,8 @@ class HYBRIDTREE_API InputError : public Error {
 };
 
 /// A scene that loads but cannot be evaluated or meshed as asked: an unbounded solid to mesh,
-/// a grid too large, an ffd whose child has no surface.
+/// a grid too large, an ffd whose deformed mesh is not a valid mesh. (An ffd whose child has
+/// no surface at the precision is no error: it deforms nothing, and its field is 0.)
 class HYBRIDTREE_API MeshingError : public Error {
  public:
   using Error::Error;

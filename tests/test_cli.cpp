@@ -4,6 +4,7 @@
 #include "tools/scenes.hpp"
 
 #include <gtest/gtest.h>
+#include <sys/stat.h>
 
 #include <map>
 
@@ -211,12 +212,25 @@ TEST(Cli, MeshRefusesCleanlyAndLeavesNoFile) {
     EXPECT_TRUE(std::filesystem::is_character_file("/dev/full"));
     EXPECT_FALSE(std::filesystem::exists(dir / "f.ply"));
   }
-  // A link is written through: the link stays, its target gets the mesh.
+  // A pipe behind a link (as /dev/stdout is, through /proc/self/fd/1 -> "pipe:[N]").
+  ASSERT_EQ(::mkfifo((dir / "fifo").c_str(), 0600), 0);
+  std::filesystem::create_symlink(dir / "fifo", dir / "to_fifo.json");
+  const auto piped = test::run_cli("mesh " + s + " -o " + (dir / "pp.ply").string() + " --precision 0.1 --stats-json " +
+                                   (dir / "to_fifo.json").string());
+  EXPECT_EQ(piped.code, 2) << piped.err;
+  EXPECT_NE(piped.err.find("is not a regular file"), std::string::npos) << piped.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "pp.ply"));
+  // A link is written through: the link stays, its target gets the mesh; the format is the
+  // requested name's, whatever the target is called.
   std::filesystem::create_symlink(dir / "target.ply", dir / "link.ply");
   const auto link = test::run_cli("mesh " + s + " -o " + (dir / "link.ply").string() + " --precision 0.1");
   EXPECT_EQ(link.code, 0) << link.err;
   EXPECT_TRUE(std::filesystem::is_symlink(dir / "link.ply"));
   EXPECT_GT(std::filesystem::file_size(dir / "target.ply"), 0u);
+  std::filesystem::create_symlink(dir / "blob", dir / "named.ply");
+  const auto named = test::run_cli("mesh " + s + " -o " + (dir / "named.ply").string() + " --precision 0.1");
+  EXPECT_EQ(named.code, 0) << named.err;
+  EXPECT_GT(std::filesystem::file_size(dir / "blob"), 0u);
   const auto empty = test::run_cli("mesh " + write_scene(dir, "e.json", R"({"hybridtree": 1, "root": {"type": "point",
       "center": [0,0,0], "radius": 1, "strength": 0.3}})") + " -o " + (dir / "e.ply").string());
   EXPECT_EQ(empty.code, 0) << empty.err;

@@ -320,8 +320,8 @@ int cmd_mesh(const MeshArgs& a) {
               a.out.c_str(), checks.triangles, checks.vertices, run.options.precision, run.mesh_seconds,
               ht::root_strategy(run, tree.root()).c_str(), checks.watertight() ? "closed manifold" : "NOT watertight",
               checks.genus);
-  // Every mesher aims at none of these; where one is left, say so rather than let the summary
-  // line's "closed manifold" stand for a clean mesh.
+  // Every mesher aims at none of these; where the full checks (--stats-json) find one, say so
+  // rather than let the summary line's "closed manifold" stand for a clean mesh.
   if (checks.self_intersecting_pairs > 0 || checks.folded_triangles > 0)
     std::fprintf(stderr,
                  "hybridtree: warning: %s: the mesh has %zu self-intersecting triangle pairs and %zu folded triangles "
