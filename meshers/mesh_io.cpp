@@ -8,6 +8,7 @@
 
 #include <algorithm>
 #include <cctype>
+#include <cstdio>
 #include <mutex>
 #include <random>
 #include <string>
@@ -41,6 +42,30 @@ void to_openmesh(const TriangleMesh& mesh, TriMeshHolder& out) {
   if (link_manifold_triangles(m, mesh.triangles)) return;
   for (const auto& t : mesh.triangles) m.add_face(vh[t[0]], vh[t[1]], vh[t[2]]);
 }
+
+namespace {
+
+// OFF or OBJ from the doubles themselves, each coordinate in the 17 significant digits that read
+// back to the same bits: OpenMesh's ASCII writers go through float vertices (about 8 digits), so
+// a mesh leaf's exact surface came out moved by up to 3e-8 of its size. False on any write error.
+bool write_text(const TriangleMesh& mesh, const std::filesystem::path& file, bool off) {
+  std::FILE* f = std::fopen(file.c_str(), "wb");
+  if (!f) return false;
+  bool ok = !off || std::fprintf(f, "OFF\n%zu %zu 0\n", mesh.positions.size(), mesh.triangles.size()) > 0;
+  const char* vertex = off ? "%.17g %.17g %.17g\n" : "v %.17g %.17g %.17g\n";
+  for (std::size_t i = 0; ok && i < mesh.positions.size(); ++i)
+    ok = std::fprintf(f, vertex, mesh.positions[i].x, mesh.positions[i].y, mesh.positions[i].z) > 0;
+  const unsigned base = off ? 0u : 1u;  // OBJ counts from 1
+  const char* face = off ? "3 %u %u %u\n" : "f %u %u %u\n";
+  for (std::size_t i = 0; ok && i < mesh.triangles.size(); ++i) {
+    const glm::uvec3& t = mesh.triangles[i];
+    ok = std::fprintf(f, face, t[0] + base, t[1] + base, t[2] + base) > 0;
+  }
+  ok = ok && std::fflush(f) == 0 && !std::ferror(f);
+  return std::fclose(f) == 0 && ok;
+}
+
+}  // namespace
 
 std::filesystem::path output_target(const std::filesystem::path& file) {
   std::error_code ec;
@@ -81,7 +106,9 @@ void write_mesh(const TriangleMesh& mesh, const std::filesystem::path& requested
   std::random_device rd;
   const std::filesystem::path tmp = dir / (file.stem().string() + ".partial-" + std::to_string(rd()) + ext);
   bool ok;
-  {
+  if (ext == ".off" || ext == ".obj") {
+    ok = write_text(mesh, tmp, ext == ".off");
+  } else {
     // The same lock as MeshLeaf::load's reads: OpenMesh's IO registry is process-wide.
     QuietOpenMesh quiet;
     ok = OpenMesh::IO::write_mesh(holder.mesh, tmp.string(), options, 17);

@@ -1,5 +1,6 @@
-// Mesh output through OpenMesh: .ply (binary), .obj, .off (ASCII, 17 significant digits) and
-// .stl (binary), chosen by the file's extension. Writes are atomic: the mesh goes to a temporary
+// Mesh output: .ply (binary) and .stl (binary, single precision by its format) through OpenMesh,
+// .obj and .off (ASCII) written here with 17 significant digits from the doubles (OpenMesh's
+// ASCII writers round to float), chosen by the file's extension. Writes are atomic: the mesh goes to a temporary
 // file beside the target, which is renamed over it only when complete, so a failure never leaves
 // a half-written file.
 #pragma once

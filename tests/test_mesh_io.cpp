@@ -11,6 +11,8 @@
 
 #include <array>
 #include <chrono>
+#include <fstream>
+#include <sstream>
 #include <future>
 #include <latch>
 #include <string>
@@ -43,6 +45,43 @@ std::string compare(const MeshLeaf& leaf, const TriangleMesh& written) {
     if (!found) return "a vertex moved";
   }
   return {};
+}
+
+// OFF and OBJ keep every bit of the doubles, read back as doubles (our own mesh leaves read
+// coordinates as floats, as OpenMesh did; other tools read them whole). OpenMesh's writer
+// rounded them to float first: 0.45420201894740647 came out as 0.45420202612876892.
+TEST(MeshIo, TextFormatsKeepEveryBit) {
+  const auto dir = test::temp_dir("mesh-io-bits");
+  TriangleMesh m = octahedron(glm::dvec3(0.1, 1.0 / 3.0, -0.2646415), 0.7);
+  m.positions[0].x += 1e-13;  // a bit a float cannot hold
+  for (const char* name : {"m.off", "m.obj"}) {
+    write_mesh(m, dir / name);
+    std::ifstream in(dir / name);
+    std::string line;
+    std::vector<glm::dvec3> read;
+    std::vector<glm::uvec3> faces;
+    const bool off = std::string(name) == "m.off";
+    for (int n = 0; std::getline(in, line); ++n) {
+      std::istringstream words(line);
+      std::string tag;
+      if (off && n < 2) continue;  // "OFF", then the counts
+      if (!off) words >> tag;
+      if (off ? read.size() < m.positions.size() : tag == "v") {
+        glm::dvec3 p;
+        words >> p.x >> p.y >> p.z;
+        read.push_back(p);
+      } else {
+        unsigned k = 0;
+        glm::uvec3 t;
+        if (off) words >> k;
+        words >> t[0] >> t[1] >> t[2];
+        faces.push_back(off ? t : t - glm::uvec3(1));
+      }
+    }
+    EXPECT_EQ(read, m.positions) << name;
+    EXPECT_EQ(faces, m.triangles) << name;
+  }
+  std::filesystem::remove_all(dir);
 }
 
 TEST(MeshIoThreads, ConcurrentWritesAndLoadsComeBackWhole) {
@@ -79,21 +118,22 @@ TEST(MeshIoThreads, ConcurrentWritesAndLoadsComeBackWhole) {
 }
 
 // While the shared lock is held elsewhere, neither a write nor a load may reach OpenMesh: both
-// wait for it, so they are serialised against each other and against any other OpenMesh IO. The
-// load is of PLY: OFF is read without OpenMesh (nodes/mesh_text.hpp) and takes no lock.
+// wait for it, so they are serialised against each other and against any other OpenMesh IO. Both
+// are of PLY: OFF is read and written without OpenMesh (nodes/mesh_text.hpp, write_text) and
+// takes no lock.
 TEST(MeshIoThreads, WritesAndLoadsWaitForTheOneLock) {
   const auto dir = test::temp_dir("mesh-io-lock");
   const TriangleMesh mesh = octahedron(glm::dvec3(0.0), 1.0);
   write_mesh(mesh, dir / "ready.ply");
   std::unique_lock lock(openmesh_io_mutex());
-  auto write = std::async(std::launch::async, [&] { write_mesh(mesh, dir / "written.off"); });
+  auto write = std::async(std::launch::async, [&] { write_mesh(mesh, dir / "written.ply"); });
   auto load = std::async(std::launch::async, [&] { return MeshLeaf::load(dir / "ready.ply"); });
   EXPECT_EQ(write.wait_for(std::chrono::milliseconds(300)), std::future_status::timeout);
   EXPECT_EQ(load.wait_for(std::chrono::milliseconds(0)), std::future_status::timeout);
   lock.unlock();
   write.get();
   EXPECT_EQ(compare(*load.get(), mesh), "");
-  EXPECT_EQ(compare(*MeshLeaf::load(dir / "written.off"), mesh), "");
+  EXPECT_EQ(compare(*MeshLeaf::load(dir / "written.ply"), mesh), "");
   std::filesystem::remove_all(dir);
 }
 
