@@ -3,7 +3,6 @@
 #include "meshers/mesh_checks.hpp"
 #include "meshers/self_intersections.hpp"
 #include "meshers/union_find.hpp"
-#include "nodes/winding.hpp"
 
 #include <glm/geometric.hpp>
 
@@ -31,7 +30,6 @@ bool winding_leaf_is_its_surface(const MeshLeaf& leaf) {
   // The winding number a step off the triangle's centroid on either side, the step short enough
   // that nothing else lies within it: the nearest triangle to each end is then no nearer than the
   // step, as it would be were another surface crossed on the way (a plate a hair inside a wall).
-  const WindingTree winding(m.positions, m.triangles);
   for (std::uint32_t s = 0; s < m.positions.size(); ++s) {
     if (largest[s] < 0) continue;
     const glm::uvec3& t = m.triangles[pick[s]];
@@ -43,7 +41,7 @@ bool winding_leaf_is_its_surface(const MeshLeaf& leaf) {
       const glm::dvec3 behind = centre - step * normal, ahead = centre + step * normal;
       if (!(leaf.query(behind, 2.0 * step).distance >= 0.999 * step && leaf.query(ahead, 2.0 * step).distance >= 0.999 * step))
         continue;
-      const double w_behind = winding.estimate(behind, 0.0, 1e-3).w, w_ahead = winding.estimate(ahead, 0.0, 1e-3).w;
+      const double w_behind = leaf.winding_number(behind, 1e-3), w_ahead = leaf.winding_number(ahead, 1e-3);
       if (!(std::abs(w_behind - 1.0) < 0.25 && std::abs(w_ahead) < 0.25)) return false;
       checked = true;
       break;

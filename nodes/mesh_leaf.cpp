@@ -363,6 +363,10 @@ MeshLeaf::Closest MeshLeaf::Neighbours::next(const glm::dvec3& p) {
   return c;
 }
 
+double MeshLeaf::winding_number(const glm::dvec3& p, double tolerance) const {
+  return winding_ ? winding_->estimate(p, 0.0, tolerance).w : std::numeric_limits<double>::quiet_NaN();
+}
+
 bool MeshLeaf::inside(const glm::dvec3& p) const {
   if (!bounds_.contains(p)) return false;
   if (winding_) return winding_->inside(p);

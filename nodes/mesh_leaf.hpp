@@ -129,6 +129,9 @@ class MeshLeaf {
   /// outside). For a closed leaf -1 always (its callers use query() there). Thread-safe.
   int box_side(const Aabb& box) const;
   MeshInside inside_mode() const { return report_.inside; }
+  /// For a winding leaf, the generalized winding number at p to within `tolerance`
+  /// (nodes/winding.hpp WindingTree::estimate); NaN for a closed leaf. Thread-safe.
+  double winding_number(const glm::dvec3& p, double tolerance) const;
   /// Batched form of query() for float lanes: n points as three coordinate arrays; writes
   /// distance[i] (+infinity beyond radius) and inside[i] (0/1). Thread-safe; no allocation.
   /// A block of points (a polygonizer brick's) farther than the radius from the surface costs
