@@ -47,8 +47,9 @@ void crease_phase(RootField& field, const FeatureOptions& features, double h, Tr
 /// The quality pass (meshers/quality.hpp) on the bricks' own tapes, crease points kept, the
 /// vertices inside the `locks` boxes kept where extraction put them; what it leaves intersecting
 /// is unfolded, and triangles folded over are collapsed (meshers/unfold.hpp unfold_folded).
-/// Returns, when pairs were left and `locks` is empty, boxes around them: the caller runs the
-/// pass again from the extracted mesh with those as `locks`.
+/// Returns boxes around what is left, when intersecting pairs were left and `locks` is empty, or
+/// folded triangles were left on any run: the caller runs the pass again from the extracted mesh
+/// with those added to `locks`.
 std::vector<Aabb> quality_phase(SurfaceField& field, RootField& root_field, double h, const QualityOptions& options,
                                 MemoryBudget& budget, TriangleMesh& mesh, const std::vector<std::uint8_t>& on_crease,
                                 const QualityReuse* reuse, std::span<const Aabb> locks, PolygonizeStats& stats);
