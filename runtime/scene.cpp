@@ -10,6 +10,7 @@
 #include <nlohmann/json.hpp>
 
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <set>
 #include <sstream>
@@ -409,12 +410,35 @@ Tree load_scene_text(const std::string& text, const std::filesystem::path& base_
 }
 
 Tree load_scene(const std::filesystem::path& file) {
+  const std::string name = file.string();
   std::ifstream in(file, std::ios::binary);
-  if (!in) throw SceneError(file.string(), file.string() + ": cannot open the scene file");
-  std::stringstream s;
-  s << in.rdbuf();
-  if (in.bad()) throw SceneError(file.string(), file.string() + ": cannot read the scene file");
-  return load_scene_text(s.str(), file.parent_path(), file.string());
+  if (!in) throw SceneError(name, name + ": cannot open the scene file");
+  // Read in pieces, so that a device or a stream that is no scene (/dev/zero, /dev/urandom) is
+  // told apart by its first bytes or its size instead of filling memory: a scene is a JSON object.
+  std::string text;
+  std::vector<char> piece(std::size_t(1) << 16);
+  bool looked = false;
+  while (in) {
+    in.read(piece.data(), std::streamsize(piece.size()));
+    const std::size_t from = text.size();
+    text.append(piece.data(), std::size_t(in.gcount()));
+    if (!looked) {
+      const std::size_t first = text.find_first_not_of(" \t\r\n", from);
+      if (first != std::string::npos) {
+        looked = true;
+        if (text[first] != '{' && !(text.compare(first, 3, "\xEF\xBB\xBF") == 0)) {
+          char hex[8];
+          std::snprintf(hex, sizeof hex, "0x%02x", unsigned(static_cast<unsigned char>(text[first])));
+          throw SceneError(name, name + ": is not a scene: a scene is a JSON object, which starts with '{', and byte " +
+                                     std::to_string(first) + " is " + hex);
+        }
+      }
+    }
+    if (text.size() > kMaxSceneBytes)
+      throw SceneError(name, name + ": is not a scene: it is larger than " + std::to_string(kMaxSceneBytes >> 20) + " MiB");
+  }
+  if (in.bad()) throw SceneError(name, name + ": cannot read the scene file");
+  return load_scene_text(text, file.parent_path(), name);
 }
 
 }  // namespace ht

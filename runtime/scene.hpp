@@ -22,7 +22,14 @@ struct SceneError : std::runtime_error {
   std::string path;    ///< the JSON path ("root.children[2].radius"); empty for whole-file failures
 };
 
-/// Loads a scene file; relative mesh paths are resolved against the file's folder.
+/// A scene file larger than this is refused: scenes name their meshes' files rather than hold
+/// them, so a bigger one is some other stream (a device, a mesh or an archive given by mistake).
+inline constexpr std::size_t kMaxSceneBytes = std::size_t(256) << 20;
+
+/// Loads a scene file; relative mesh paths are resolved against the file's folder. Anything that
+/// can be read in order will do (a pipe, /dev/stdin); what does not start with '{' (after
+/// whitespace or a UTF-8 byte order mark) or runs past kMaxSceneBytes is refused once that much
+/// is read.
 Tree load_scene(const std::filesystem::path& file);
 
 /// Loads a scene from text; `source` names it in messages, `base_dir` resolves mesh paths.

@@ -82,7 +82,12 @@ TEST(Cli, BadScenesExitTwoWithPathAndRule) {
   EXPECT_NE(missing.err.find("cannot open the scene file"), std::string::npos);
   const auto garbage = test::run_cli("info " + write_scene(dir, "g.json", "\x01\x02garbage"));
   EXPECT_EQ(garbage.code, 2);
-  EXPECT_NE(garbage.err.find("not valid JSON"), std::string::npos);
+  EXPECT_NE(garbage.err.find("g.json: is not a scene: a scene is a JSON object, which starts with '{', and byte 0 is 0x01"),
+            std::string::npos)
+      << garbage.err;
+  const auto broken = test::run_cli("info " + write_scene(dir, "b.json", "{\"hybridtree\": 1,"));
+  EXPECT_EQ(broken.code, 2);
+  EXPECT_NE(broken.err.find("not valid JSON"), std::string::npos) << broken.err;
   const auto usage = test::run_cli("frobnicate");
   EXPECT_EQ(usage.code, 2);
   std::filesystem::remove_all(dir);

@@ -6,6 +6,8 @@
 #include "tests/support/test_support.hpp"
 
 #include <gtest/gtest.h>
+#include <filesystem>
+#include <fstream>
 
 #include <string>
 
@@ -122,6 +124,33 @@ TEST(Scene, EveryMalformedSceneNamesThePathAndTheRule) {
       EXPECT_EQ(msg.rfind("s.json: ", 0), 0u) << msg;
     }
   }
+}
+
+// A stream that is no scene is told by its first bytes, before it fills memory: `hybridtree mesh
+// /dev/zero` read for 32 s up to 4 GB and ended with std::bad_alloc (the second stress run).
+TEST(Scene, AFileThatIsNoSceneIsToldByItsFirstBytes) {
+  const auto message = [](const std::filesystem::path& file) -> std::string {
+    try {
+      load_scene(file);
+    } catch (const SceneError& e) {
+      return e.what();
+    }
+    return "loaded";
+  };
+  if (std::filesystem::is_character_file("/dev/zero")) {
+    EXPECT_EQ(message("/dev/zero"),
+              "/dev/zero: is not a scene: a scene is a JSON object, which starts with '{', and byte 0 is 0x00");
+  }
+  const std::filesystem::path dir = test::temp_dir("scene_bytes");
+  const auto write = [&](const std::string& name, const std::string& bytes) {
+    std::ofstream(dir / name, std::ios::binary) << bytes;
+    return dir / name;
+  };
+  const std::string point = scene(kPoint);
+  EXPECT_NE(message(write("off.json", "OFF\n3 1 0\n")).find("byte 0 is 0x4f"), std::string::npos);
+  EXPECT_NE(message(write("spaced.json", "\n\n  [1]")).find("byte 4 is 0x5b"), std::string::npos);
+  EXPECT_EQ(message(write("ok.json", "\n  " + point)), "loaded");
+  EXPECT_EQ(message(write("bom.json", "\xEF\xBB\xBF" + point)), "loaded");
 }
 
 TEST(Scene, DeepNestingIsAnErrorNotACrash) {
