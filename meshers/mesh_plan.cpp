@@ -452,13 +452,13 @@ std::shared_ptr<const TriangleMesh> Runner::execute(const Job& job, NodeReport& 
       // A leaf of negative strength carves what it is blended with; alone its field is nowhere
       // above T (> 0), so its solid, and its mesh, is empty; so is an empty ffd's (strength 0).
       if (leaf_strength(*g, n) <= 0) return std::make_shared<const TriangleMesh>();
-      return g->meshes[g->mesh[n]]->surface();
+      return g->meshes[g->mesh[n]]->manifold_surface();
     case JobStrategy::Global:
       // A winding leaf whose triangles are its solid's surface all the same keeps them.
       if (job.reason == JobReason::WindingLeaf && leaf_strength(*g, n) > 0 &&
           winding_leaf_is_its_surface(*g->meshes[g->mesh[n]])) {
         r.strategy = JobStrategy::SharedLeaf;
-        return g->meshes[g->mesh[n]]->surface();
+        return g->meshes[g->mesh[n]]->manifold_surface();
       }
       return global(n, g, r, jobs_.size() == 1);
     case JobStrategy::Sweep: {
@@ -509,7 +509,7 @@ std::shared_ptr<const TriangleMesh> Runner::execute(const Job& job, NodeReport& 
         attached = graph_;
         leaves_[std::size_t(&job - jobs_.data())] = leaf;
       }
-      if (crossing == 0) return leaf->surface();
+      if (crossing == 0) return leaf->manifold_surface();
       // The deformed mesh defines the node's field all the same; its surface is polygonized.
       r.reason = JobReason::Fallback;
       r.fallback_cause = "the deformed mesh overlaps itself (" + std::to_string(crossing) + " intersecting triangle pairs)";

@@ -50,6 +50,7 @@ struct MeshReport {
   std::size_t nonmanifold_edges = 0;   ///< edges with more than two faces
   std::size_t duplicate_vertices = 0;  ///< vertices at the position of an earlier one
   std::size_t intersecting_shells = 0; ///< pairs of shells that cross (checked for closed leaves)
+  std::size_t pinched_vertices = 0;    ///< closed leaves: vertices where shells touch (fans sharing no edge)
   std::size_t input_faces = 0;       ///< faces as read (polygons count once)
   std::size_t vertices = 0;
   std::size_t triangles = 0;
@@ -145,6 +146,10 @@ class MeshLeaf {
   /// For a winding leaf this is the input, not the surface of its solid (open, maybe crossing):
   /// the mesh plan polygonizes such a leaf instead.
   std::shared_ptr<const TriangleMesh> surface() const { return surface_; }
+  /// surface() as a manifold, for output: the same triangles in the same order, with each fan of
+  /// faces after the first at a vertex where shells touch (MeshReport::pinched_vertices) on a copy
+  /// of that vertex appended after the others. surface() itself when there is none.
+  std::shared_ptr<const TriangleMesh> manifold_surface() const { return manifold_ ? manifold_ : surface_; }
   const Aabb& bounds() const { return bounds_; }
   /// Points nearer to the mesh than this (world units) count as on it for gradients: there the
   /// gradient follows Closest::normal, the one-sided limit from outside, instead of the
@@ -182,6 +187,7 @@ class MeshLeaf {
   std::filesystem::path file_;
   bool repair_requested_ = false;
   std::shared_ptr<TriangleMesh> surface_ = std::make_shared<TriangleMesh>();
+  std::shared_ptr<const TriangleMesh> manifold_;  ///< with MeshReport::pinched_vertices > 0 only
   Aabb bounds_;
   double surface_band_ = 0;
   MeshReport report_;

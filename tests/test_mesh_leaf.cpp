@@ -1,6 +1,7 @@
 // Mesh leaves: the field matches SCENE_FORMAT.md on real meshes, the inside test agrees with a
 // brute-force generalized winding number, orientation and repair do what the report says, and
 // bad input fails with a message that says what is wrong.
+#include "meshers/mesh_checks.hpp"
 #include "nodes/mesh_leaf.hpp"
 #include "nodes/primitives.hpp"
 #include "nodes/trimesh.hpp"
@@ -570,7 +571,24 @@ TEST(MeshOrientation, ShellsTouchingAtAVertex) {
                                         {0, 5, 4}, {0, 6, 5}, {0, 4, 6}, {4, 5, 6}};
   const auto leaf = MeshLeaf::from_triangles(pos, tris, "hourglass");
   EXPECT_EQ(leaf->report().components, 2u);
+  EXPECT_EQ(leaf->report().pinched_vertices, 1u);
   EXPECT_EQ(leaf->openmesh().mesh.n_faces(), 8u);
+  // What is written out gives each cone its own tip (the mesh as it is failed at the end as a
+  // non-manifold output): the same triangles, a copy of vertex 0 for the second fan.
+  const TriangleMesh& out = *leaf->manifold_surface();
+  EXPECT_EQ(out.triangles.size(), 8u);
+  ASSERT_EQ(out.positions.size(), 8u);
+  EXPECT_EQ(out.positions[7], out.positions[0]);
+  for (std::size_t t = 0; t < 8; ++t)
+    for (int k = 0; k < 3; ++k)
+      EXPECT_EQ(out.triangles[t][k], leaf->triangles()[t][k] == 0 && t >= 4 ? 7u : leaf->triangles()[t][k]) << t;
+  const MeshChecks c = check_mesh(out);
+  EXPECT_TRUE(c.watertight());
+  EXPECT_EQ(c.nonmanifold_vertices, 0u);
+  EXPECT_EQ(c.self_intersecting_pairs, 0u);
+  const auto one = MeshLeaf::from_triangles({pos.begin(), pos.begin() + 4}, {tris.begin(), tris.begin() + 4}, "one");
+  EXPECT_EQ(one->report().pinched_vertices, 0u);
+  EXPECT_EQ(one->manifold_surface(), one->surface());
   std::normal_distribution<double> g(0.0, 1.0);
   std::size_t in = 0;
   for (int i = 0; i < 20000; ++i) {
