@@ -134,9 +134,9 @@ void check_queries(const MeshLeaf& leaf) {
 void check_round_trip(const MeshLeaf& leaf, const std::string& ext) {
   const std::filesystem::path file = scratch_dir() / ("round" + ext);
   try {
-    write_mesh(*leaf.surface(), file);
+    write_mesh(*leaf.manifold_surface(), file);
   } catch (const MeshWriteError&) {
-    return;  // a vertex where two shells touch: a half-edge mesh cannot hold it (documented)
+    return;  // refused with a message (an OpenMesh writer's own limits): no crash, nothing to read
   }
   try {
     const auto back = MeshLeaf::load(file);

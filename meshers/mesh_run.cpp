@@ -1,5 +1,6 @@
 #include "meshers/mesh_run.hpp"
 
+#include "meshers/polygonize.hpp"
 #include "meshers/surface_field.hpp"
 #include "runtime/tape.hpp"
 
@@ -9,6 +10,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <limits>
 
 namespace ht {
 
@@ -21,7 +23,9 @@ double default_precision(const Tree& tree, double requested) {
 
 void check_precision(const Tree& tree, double precision) {
   const Aabb solid = solid_bounds(tree.graph(), tree.root(), tree.threshold());
-  if (solid.empty() || !solid.finite()) return;
+  if (solid.empty()) return;
+  if (const std::string why = unresolvable_precision(solid, precision); !why.empty()) throw PolygonizeError(why);
+  if (!solid.finite()) return;
   const double across = glm::length(solid.size());
   if (precision <= across) return;
   char buf[256];
@@ -185,7 +189,10 @@ MeshRun run_mesh(const Tree& tree, const MeshRunOptions& o) {
   MeshOptions& options = run.options;
   options.precision = default_precision(tree, o.precision);
   check_precision(tree, options.precision);
-  options.polygonize.memory_budget = static_cast<std::size_t>(o.memory_gib * double(1u << 30));
+  // More GiB than size_t holds in bytes (--memory-budget 1e12) is no limit: the cast alone was
+  // undefined and gave 0 bytes.
+  const double bytes = o.memory_gib * double(1u << 30);
+  options.polygonize.memory_budget = bytes < 0x1p64 ? static_cast<std::size_t>(bytes) : std::numeric_limits<std::size_t>::max();
   options.polygonize.sharp_features = o.sharp_features;
   options.polygonize.quality.enabled = o.quality;
   options.blend_overlap = tree.mesher_settings().blend_overlap;

@@ -119,6 +119,16 @@ struct PolygonizeError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
+/// A cell must hold at least this many steps of doubles at the solid's farthest coordinate: a
+/// finer precision cannot place the grid's points apart (a point translated by 1e17, where doubles
+/// step by 16, sent the brick classification into endless subdivision at h = 0.03).
+inline constexpr double kCoordinateSteps = 1e6;
+
+/// The message for a precision below what doubles resolve where `solid` lies, or empty when
+/// they resolve it: precision >= kCoordinateSteps times the spacing of doubles at its farthest
+/// coordinate.
+std::string unresolvable_precision(const Aabb& solid, double precision);
+
 /// Thrown when a run is cancelled through its cancellation flag.
 struct MeshCancelled : PolygonizeError {
   using PolygonizeError::PolygonizeError;

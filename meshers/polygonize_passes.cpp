@@ -79,9 +79,9 @@ void crease_phase(RootField& field, const FeatureOptions& features, double h, Tr
   stats.folds += unfold_folded(mesh, on_crease, gradient_of(eval), field.T);
 }
 
-std::vector<Aabb> quality_phase(SurfaceField& field, RootField& root_field, double h, const QualityOptions& options,
-                                MemoryBudget& budget, TriangleMesh& mesh, const std::vector<std::uint8_t>& on_crease,
-                                const QualityReuse* reuse, std::span<const Aabb> locks, PolygonizeStats& stats) {
+RetryRequest quality_phase(SurfaceField& field, RootField& root_field, double h, const QualityOptions& options,
+                           MemoryBudget& budget, TriangleMesh& mesh, const std::vector<std::uint8_t>& on_crease,
+                           const QualityReuse* reuse, std::span<const Aabb> locks, PolygonizeStats& stats) {
   const MemoryReservation held(budget, kQualityBytesPerVertex * double(mesh.positions.size()),
                                "the quality pass on " + std::to_string(mesh.positions.size()) + " vertices");
   const double T = root_field.T;
@@ -109,27 +109,30 @@ std::vector<Aabb> quality_phase(SurfaceField& field, RootField& root_field, doub
   stats.quality_intersections += left.size();
   stats.crease_intersections = left.size();
   if (!left.empty()) resolve_folds(mesh, crease_after, root_field.get(), T, h, left, stats);
-  std::vector<Aabb> folds;
+  RetryRequest retry;
   auto box_around = [&](std::span<const std::uint32_t> triangles, double cells) {
     Aabb box;
     for (const std::uint32_t t : triangles)
       for (int k = 0; k < 3; ++k) box.grow(mesh.positions[mesh.triangles[t][k]]);
-    folds.push_back(box.expanded(cells * h));
+    retry.boxes.push_back(box.expanded(cells * h));
   };
-  if (locks.empty())  // a run with locks asks for no more around intersections: resolve_folds had them
+  if (locks.empty()) {  // a run with locks asks for no other
     for (const auto& pair : left) box_around(pair, kFoldLockCells);
+    retry.crossing = !left.empty();
+  }
   // After the boxes are taken: collapses renumber the triangles `left` names. What the crease
   // step left folded was the pass's to work on: what is left now is all there is.
   stats.folds.pairs_after = 0;
   const BatchGradient gradient = gradient_of(field);
   stats.folds += unfold_folded(mesh, crease_after, gradient, T);
   // Triangles left turned over that no collapse mends (beside a crease, where crease points stay)
-  // are mostly the pass's doing: their corners are kept as extracted on the next run. (Boxes two
+  // are mostly the pass's doing: the extracted vertices in their boxes are kept on the next run,
+  // whose result is taken when it has fewer folds and no smaller angle. (Boxes two
   // cells wide kept raw slivers of 0.2 degrees beside the folds of tests/data/stress/
   // folded_minmax_union.json; the triangle's own box mends them with its smallest angle 9 degrees.)
-  if (stats.folds.pairs_after > 0)
+  if (locks.empty() && stats.folds.pairs_after > 0)
     for (const std::uint32_t t : folded_triangles(mesh, gradient)) box_around(std::span(&t, 1), 0.0);
-  return folds;
+  return retry;
 }
 
 }  // namespace ht

@@ -44,14 +44,21 @@ struct RootField {
 void crease_phase(RootField& field, const FeatureOptions& features, double h, TriangleMesh& mesh,
                   const std::vector<glm::vec3>& normals, std::vector<std::uint8_t>& on_crease, PolygonizeStats& stats);
 
+/// What a polygonization's quality phase asks of a second run: boxes whose vertices it keeps as
+/// extracted, around intersecting pairs the pass left (`crossing`: the second run's result is
+/// taken) or triangles it left folded over (the better of the two runs is taken).
+struct RetryRequest {
+  std::vector<Aabb> boxes;
+  bool crossing = false;
+};
+
 /// The quality pass (meshers/quality.hpp) on the bricks' own tapes, crease points kept, the
 /// vertices inside the `locks` boxes kept where extraction put them; what it leaves intersecting
 /// is unfolded, and triangles folded over are collapsed (meshers/unfold.hpp unfold_folded).
-/// Returns boxes around what is left, when intersecting pairs were left and `locks` is empty, or
-/// folded triangles were left on any run: the caller runs the pass again from the extracted mesh
-/// with those added to `locks`.
-std::vector<Aabb> quality_phase(SurfaceField& field, RootField& root_field, double h, const QualityOptions& options,
-                                MemoryBudget& budget, TriangleMesh& mesh, const std::vector<std::uint8_t>& on_crease,
-                                const QualityReuse* reuse, std::span<const Aabb> locks, PolygonizeStats& stats);
+/// Returns, when `locks` is empty and pairs or folds are left, boxes around them: the caller
+/// runs the pass again from the extracted mesh with those as `locks`.
+RetryRequest quality_phase(SurfaceField& field, RootField& root_field, double h, const QualityOptions& options,
+                           MemoryBudget& budget, TriangleMesh& mesh, const std::vector<std::uint8_t>& on_crease,
+                           const QualityReuse* reuse, std::span<const Aabb> locks, PolygonizeStats& stats);
 
 }  // namespace ht

@@ -240,9 +240,10 @@ void count_defects(const std::vector<glm::dvec3>& pos, const std::vector<glm::uv
 // Vertices where two or more fans of faces meet (shells touching at a point), on a mesh whose
 // edges each join two faces: corners around a vertex linked across its edges are one fan. When
 // some are found, `split` receives the triangles with each fan after a vertex's first on a vertex
-// of its own (appended to `positions` in the order of the fans' first corners). Returns how many.
-std::size_t split_pinched_vertices(const std::vector<glm::uvec3>& tris, const Topology& topo,
-                                   std::vector<glm::dvec3>& positions, std::vector<glm::uvec3>& split) {
+// of its own, numbered from `vertices` on in the order of the fans' first corners, and `copied`
+// the vertex each copies. Returns how many vertices are pinched.
+std::size_t split_pinched_vertices(const std::vector<glm::uvec3>& tris, const Topology& topo, std::size_t vertices,
+                                   std::vector<glm::uvec3>& split, std::vector<std::uint32_t>& copied) {
   UnionFind corners(3 * tris.size());
   auto corner_at = [&](std::uint32_t t, std::uint32_t v) {
     const glm::uvec3 c = tris[t];
@@ -255,10 +256,9 @@ std::size_t split_pinched_vertices(const std::vector<glm::uvec3>& tris, const To
       corners.unite(corner_at(t, v), corner_at(other, v));
   }
   // A fan's root is its first corner: fans are met in the order of their first corners.
-  std::vector<std::uint8_t> seen(positions.size(), 0);
+  std::vector<std::uint8_t> seen(vertices, 0);
   std::vector<std::uint32_t> vertex_of(3 * tris.size(), kNone);
   std::size_t pinched = 0;
-  const std::size_t before = positions.size();
   for (std::uint32_t k = 0; k < 3 * tris.size(); ++k) {
     if (corners.find(k) != k) continue;
     const std::uint32_t v = corner(tris[k / 3], k % 3);
@@ -268,10 +268,10 @@ std::size_t split_pinched_vertices(const std::vector<glm::uvec3>& tris, const To
       continue;
     }
     if (seen[v] == 1) ++pinched, seen[v] = 2;
-    vertex_of[k] = std::uint32_t(positions.size());
-    positions.push_back(positions[v]);
+    vertex_of[k] = std::uint32_t(vertices + copied.size());
+    copied.push_back(v);
   }
-  if (positions.size() == before) return 0;
+  if (copied.empty()) return 0;
   split.resize(tris.size());
   for (std::uint32_t k = 0; k < 3 * tris.size(); ++k) {
     split[k / 3][static_cast<glm::length_t>(k % 3)] = vertex_of[corners.find(k)];
@@ -483,10 +483,14 @@ std::shared_ptr<MeshLeaf> MeshLeaf::build(std::vector<glm::dvec3> positions,
   if (!winding) {
     // Shells touching at a vertex: the queries take the mesh as it is; what is written out gives
     // each fan its own copy of the vertex (a manifold with two vertices at one point).
-    std::vector<glm::dvec3> apart = positions;
     std::vector<glm::uvec3> split;
-    report.pinched_vertices = split_pinched_vertices(triangles, topo, apart, split);
-    if (report.pinched_vertices > 0) leaf->manifold_ = std::make_shared<const TriangleMesh>(TriangleMesh{std::move(apart), std::move(split)});
+    std::vector<std::uint32_t> copied;
+    report.pinched_vertices = split_pinched_vertices(triangles, topo, positions.size(), split, copied);
+    if (report.pinched_vertices > 0) {
+      auto apart = std::make_shared<TriangleMesh>(TriangleMesh{positions, std::move(split)});
+      for (const std::uint32_t v : copied) apart->positions.push_back(positions[v]);
+      leaf->manifold_ = std::move(apart);
+    }
   }
   leaf->accel_->compute_normals(positions, triangles, std::move(topo.nbr));
   if (winding) leaf->winding_ = std::make_unique<WindingTree>(positions, triangles);

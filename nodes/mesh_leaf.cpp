@@ -430,7 +430,10 @@ int MeshLeaf::box_side(const Aabb& box) const {
 std::size_t MeshLeaf::bytes() const {
   return sizeof(MeshLeaf) + name_.capacity() + surface_->positions.capacity() * sizeof(glm::dvec3) +
          surface_->triangles.capacity() * sizeof(glm::uvec3) + (accel_ ? accel_->bytes() : 0) +
-         (winding_ ? winding_->bytes() : 0);
+         (winding_ ? winding_->bytes() : 0) +
+         (manifold_ ? manifold_->positions.capacity() * sizeof(glm::dvec3) +
+                          manifold_->triangles.capacity() * sizeof(glm::uvec3)
+                    : 0);
 }
 
 // ---------------------------------------------------------------------------------------------

@@ -120,12 +120,20 @@ bool affine_from_matrix(const double* m, double* out) {
   glm::dmat3 a(1.0);
   for (int r = 0; r < 3; ++r)
     for (int c = 0; c < 3; ++c) a[c][r] = m[4 * r + c];  // glm is column-major
+  // Invertible in doubles: a finite, nonzero determinant, a finite inverse, and a condition
+  // number (in the largest-entry norm) under 1e12. |det| against the largest entry cubed, the
+  // rule before, called diag(1e4, 1e-4, 1) singular: its determinant is 1, its condition 1e8.
   const double det = glm::determinant(a);
-  double scale = 0.0;
-  for (int r = 0; r < 3; ++r)
-    for (int c = 0; c < 3; ++c) scale = std::max(scale, std::abs(m[4 * r + c]));
-  if (!std::isfinite(det) || !(std::abs(det) > 1e-12 * scale * scale * scale)) return false;
+  if (!std::isfinite(det) || det == 0.0) return false;
   const glm::dmat3 inv = glm::inverse(a);
+  double big = 0.0, big_inverse = 0.0;
+  for (int c = 0; c < 3; ++c)
+    for (int r = 0; r < 3; ++r) {
+      if (!std::isfinite(inv[c][r])) return false;
+      big = std::max(big, std::abs(a[c][r]));
+      big_inverse = std::max(big_inverse, std::abs(inv[c][r]));
+    }
+  if (!(big * big_inverse < kMaxAffineCondition)) return false;
   const glm::dvec3 t(m[3], m[7], m[11]);
   const glm::dvec3 it = -(inv * t);
   std::copy(m, m + 12, out);

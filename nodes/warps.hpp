@@ -38,8 +38,12 @@ glm::dvec3 warp_inverse(NodeKind kind, const double* params, const glm::dvec3& p
 /// A box holding w(child_box) (conservative; exact for affine corners and Barr's rigid parts).
 Aabb warp_bounds(NodeKind kind, const double* params, const Aabb& child_box);
 
+/// Largest entry of an affine map's linear part times the largest of its inverse's: past this
+/// the map and its inverse do not round-trip points to the scene format's tolerance.
+inline constexpr double kMaxAffineCondition = 1e12;
+
 /// Fills `forward` (12) and `inverse` (12) from a 3x4 row-major forward matrix; false when the
-/// linear part is singular (|det| tiny relative to its scale).
+/// linear part is singular in doubles (no finite inverse, or a condition past kMaxAffineCondition).
 bool affine_from_matrix(const double* forward3x4, double* out24);
 
 /// Barr's bend of coordinates (u along the axis, v toward which it bends) for curvature k on

@@ -219,7 +219,8 @@ NodeId Builder::affine(NodeId child, const glm::dmat4& m) {
   if (m[0][3] != 0.0 || m[1][3] != 0.0 || m[2][3] != 0.0 || m[3][3] != 1.0)
     throw BuildError("matrix", "last row must be [0, 0, 0, 1]");
   double p[kAffineParams];
-  if (!affine_from_matrix(fwd, p)) throw BuildError("matrix", "is singular (not invertible)");
+  if (!affine_from_matrix(fwd, p))
+    throw BuildError("matrix", "is singular, or too near it to invert in double precision (condition past 1e12)");
   const NodeId c[] = {child};
   return add(NodeKind::Affine, p, c);
 }

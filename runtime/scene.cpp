@@ -420,22 +420,23 @@ Tree load_scene(const std::filesystem::path& file) {
   bool looked = false;
   while (in) {
     in.read(piece.data(), std::streamsize(piece.size()));
-    const std::size_t from = text.size();
-    text.append(piece.data(), std::size_t(in.gcount()));
-    if (!looked) {
-      const std::size_t first = text.find_first_not_of(" \t\r\n", from);
-      if (first != std::string::npos) {
-        looked = true;
-        if (text[first] != '{' && !(text.compare(first, 3, "\xEF\xBB\xBF") == 0)) {
-          char hex[8];
-          std::snprintf(hex, sizeof hex, "0x%02x", unsigned(static_cast<unsigned char>(text[first])));
-          throw SceneError(name, name + ": is not a scene: a scene is a JSON object, which starts with '{', and byte " +
-                                     std::to_string(first) + " is " + hex);
-        }
-      }
-    }
-    if (text.size() > kMaxSceneBytes)
+    const std::size_t got = std::size_t(in.gcount());
+    if (text.size() + got > kMaxSceneBytes)
       throw SceneError(name, name + ": is not a scene: it is larger than " + std::to_string(kMaxSceneBytes >> 20) + " MiB");
+    const std::size_t from = text.size();
+    text.append(piece.data(), got);
+    if (looked) continue;
+    // A UTF-8 byte order mark may open the file (the JSON parser skips it there only).
+    const std::size_t start = text.size() >= 3 && text.compare(0, 3, "\xEF\xBB\xBF") == 0 ? 3 : 0;
+    const std::size_t first = text.find_first_not_of(" \t\r\n", std::max(from, start));
+    if (first == std::string::npos) continue;
+    looked = true;
+    if (text[first] != '{') {
+      char hex[8];
+      std::snprintf(hex, sizeof hex, "0x%02x", unsigned(static_cast<unsigned char>(text[first])));
+      throw SceneError(name, name + ": is not a scene: a scene is a JSON object, which starts with '{', and byte " +
+                                 std::to_string(first) + " is " + hex);
+    }
   }
   if (in.bad()) throw SceneError(name, name + ": cannot read the scene file");
   return load_scene_text(text, file.parent_path(), name);

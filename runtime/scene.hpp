@@ -27,9 +27,9 @@ struct SceneError : std::runtime_error {
 inline constexpr std::size_t kMaxSceneBytes = std::size_t(256) << 20;
 
 /// Loads a scene file; relative mesh paths are resolved against the file's folder. Anything that
-/// can be read in order will do (a pipe, /dev/stdin); what does not start with '{' (after
-/// whitespace or a UTF-8 byte order mark) or runs past kMaxSceneBytes is refused once that much
-/// is read.
+/// can be read in order will do (a pipe, /dev/stdin); what does not start with '{' (after a
+/// UTF-8 byte order mark at its start, and whitespace) or runs past kMaxSceneBytes is refused
+/// once that much is read.
 Tree load_scene(const std::filesystem::path& file);
 
 /// Loads a scene from text; `source` names it in messages, `base_dir` resolves mesh paths.

@@ -192,14 +192,26 @@ TEST(Cli, MeshRefusesCleanlyAndLeavesNoFile) {
   EXPECT_FALSE(std::filesystem::exists(dir / "p.ply"));
   // An estimate no integer holds is said as such, not as an overflowed count.
   const auto huge = test::run_cli("mesh " + write_scene(dir, "h.json", R"({"hybridtree": 1, "root": {"type": "point",
-      "center": [0,0,0], "radius": 1e300}})") + " -o " + (dir / "m.ply").string());
+      "center": [0,0,0], "radius": 1e300}})") + " -o " + (dir / "m.ply").string() + " --precision 1e292");
   EXPECT_EQ(huge.code, 2);
   EXPECT_NE(huge.err.find("more than 10^15 triangles"), std::string::npos) << huge.err;
   EXPECT_EQ(huge.err.find("-9223372036854775808"), std::string::npos) << huge.err;
-  // Nothing but the three scenes is left in the folder: no partial output.
+  // A ball moved 1e17 away, where doubles step by 16: the grid's points could not be told apart
+  // and the brick classification recursed until the stack overflowed (a segmentation fault).
+  const auto far = test::run_cli("mesh " + write_scene(dir, "f.json", R"({"hybridtree": 1, "root": {"type": "affine",
+      "translate": [1e17, 0, 0], "child": {"type": "point", "center": [0,0,0], "radius": 1}}})") + " -o " +
+                                 (dir / "m.ply").string());
+  EXPECT_EQ(far.code, 2);
+  EXPECT_NE(far.err.find("the solid lies 1e+17 from the origin, where doubles step by 16: precision"), std::string::npos)
+      << far.err;
+  // Nothing but the four scenes is left in the folder: no partial output.
   std::size_t files = 0;
   for ([[maybe_unused]] const auto& e : std::filesystem::directory_iterator(dir)) ++files;
-  EXPECT_EQ(files, 3u);
+  EXPECT_EQ(files, 4u);
+  // More GiB than size_t holds in bytes is no limit (it was cast to a budget of 0 bytes).
+  const auto endless = test::run_cli("mesh " + s + " -o " + (dir / "e.ply").string() + " --precision 0.1 --memory-budget 1e12");
+  EXPECT_EQ(endless.code, 0) << endless.err;
+  std::filesystem::remove(dir / "e.ply");
   std::filesystem::create_directory(dir / "d.ply");
   const auto onto = test::run_cli("mesh " + s + " -o " + (dir / "d.ply").string() + " --precision 0.1");
   EXPECT_EQ(onto.code, 2);

@@ -2,6 +2,7 @@
 // path of the offending value and the rule it breaks (table-driven).
 #include "nodes/mesh_leaf.hpp"
 #include "runtime/scene.hpp"
+#include "runtime/tape_eval.hpp"
 #include "runtime/tree_eval.hpp"
 #include "tests/support/test_support.hpp"
 
@@ -82,6 +83,8 @@ std::vector<BadCase> bad_cases() {
        "root.scale: makes the map singular"},
       {scene(R"({"type": "affine", "child": )" + p + R"(, "matrix": [1,0,0,0, 0,1,0,0, 0,2,0,0, 0,0,0,1]})"),
        "root.matrix: is singular"},
+      {scene(R"({"type": "affine", "child": )" + p + R"(, "matrix": [1e8,0,0,0, 0,1e-8,0,0, 0,0,1,0, 0,0,0,1]})"),
+       "root.matrix: is singular, or too near it to invert in double precision (condition past 1e12)"},
       {scene(R"({"type": "affine", "child": )" + p + R"(, "matrix": [1,0,0,0, 0,1,0,0, 0,0,1,0, 1,0,0,1]})"),
        "root.matrix: last row must be [0, 0, 0, 1]"},
       {scene(R"({"type": "affine", "child": )" + p + R"(, "matrix": [1,0,0]})"), "root.matrix: must be 16 numbers"},
@@ -151,6 +154,24 @@ TEST(Scene, AFileThatIsNoSceneIsToldByItsFirstBytes) {
   EXPECT_NE(message(write("spaced.json", "\n\n  [1]")).find("byte 4 is 0x5b"), std::string::npos);
   EXPECT_EQ(message(write("ok.json", "\n  " + point)), "loaded");
   EXPECT_EQ(message(write("bom.json", "\xEF\xBB\xBF" + point)), "loaded");
+  // A byte order mark opens the file or is no scene's; what follows it is looked at too.
+  EXPECT_NE(message(write("bom_off.json", "\xEF\xBB\xBFOFF\n")).find("byte 3 is 0x4f"), std::string::npos);
+  EXPECT_NE(message(write("late_bom.json", " \xEF\xBB\xBF" + point)).find("byte 1 is 0xef"), std::string::npos);
+}
+
+// A stretch whose determinant is 1 is no singular map (the rule before held |det| to the largest
+// entry cubed and refused it); its inverse round-trips points.
+TEST(Scene, AStretchFarFromSingularLoads) {
+  const Tree t = load_scene_text(
+      scene(R"({"type": "affine", "child": )" + std::string(kPoint) + R"(, "matrix": [1e4,0,0,0, 0,1e-4,0,0, 0,0,1,0, 0,0,0,1]})"),
+      ".");
+  const std::vector<glm::dvec3> at = {{0, 0, 0}, {5e3, 0, 0}, {0, 5e-5, 0}, {0, 2e-4, 0}};
+  std::vector<double> v(at.size());
+  t.evaluator().field(at, v);
+  EXPECT_GT(v[0], 0.5);
+  EXPECT_GT(v[1], 0.0);
+  EXPECT_GT(v[2], 0.0);
+  EXPECT_EQ(v[3], 0.0);
 }
 
 TEST(Scene, DeepNestingIsAnErrorNotACrash) {

@@ -99,6 +99,7 @@ std::string defects_text(const ht::MeshReport& r) {
   add(r.nonmanifold_edges, "non-manifold edges");
   add(r.duplicate_vertices, "duplicate vertices");
   add(r.intersecting_shells, "crossing shell pairs");
+  add(r.pinched_vertices, "vertices where shells touch (each shell has its own copy in what is written)");
   if (r.inside == ht::MeshInside::Winding && r.components > 1) add(r.components, "components");
   return s;
 }
