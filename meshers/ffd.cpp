@@ -47,7 +47,7 @@ constexpr double kFfdTearStretch = 32.0;
 
 std::shared_ptr<const MeshLeaf> deform_child_mesh(const std::shared_ptr<const Graph>& graph, NodeId n,
                                                   const TriangleMesh& child_mesh, double max_edge, double threshold,
-                                                  std::size_t* crossing) {
+                                                  std::size_t* crossing, MemoryBudget* budget) {
   const Graph& g = *graph;
   if (child_mesh.triangles.empty())
     throw PolygonizeError("ffd node " + g.label(n) + ": its child's surface is empty, there is nothing to deform");
@@ -57,8 +57,15 @@ std::shared_ptr<const MeshLeaf> deform_child_mesh(const std::shared_ptr<const Gr
     // are moved, so a strongly bent region is not spanned by long flat triangles that cut into
     // their neighbours.
     const TapeEvaluator child_field(std::make_shared<const Tape>(compile_tape(graph, g.children_of(n)[0], threshold)));
-    mesh = warp_mesh(child_mesh, forward_map(g, n), &child_field, threshold, max_edge, nullptr, nullptr, {},
-                     std::numeric_limits<std::size_t>::max(), kFfdTearStretch);
+    const std::size_t room =
+        budget ? std::size_t(double(budget->limit() - std::min(budget->in_use(), budget->limit())) / kDeformedBytesPerTriangle)
+               : std::numeric_limits<std::size_t>::max();
+    WarpRemeshStats ws;
+    mesh = warp_mesh(child_mesh, forward_map(g, n), &child_field, threshold, max_edge, &ws, nullptr, {}, room,
+                     kFfdTearStretch);
+    if (ws.stopped)  // throws: more than `room` triangles pass what is left
+      budget->take(kDeformedBytesPerTriangle * (double(room) + 1.0),
+                   "the deformed mesh of ffd node " + g.label(n) + " (more than " + std::to_string(room) + " triangles)");
   } else {
     mesh = child_mesh;
     const double* params = g.params_of(n).data();

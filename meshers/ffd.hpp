@@ -8,6 +8,7 @@
 
 #include "meshers/triangle_mesh.hpp"
 #include "runtime/graph.hpp"
+#include "runtime/memory_budget.hpp"
 #include "runtime/tree.hpp"
 
 #include <memory>
@@ -25,10 +26,18 @@ bool needs_ffd_preparation(const Graph& graph, NodeId root);
 /// still has after its folds were unfolded (a lattice whose outer control points are moved tears
 /// the child where it leaves the lattice box, and the torn band can cross itself). Such a leaf
 /// takes its inside from the winding number (MeshInside::Winding), so its field is still defined,
-/// but its mesh is no output.
+/// but its mesh is no output. With `budget`, the refinement makes no more triangles than what
+/// the budget has left holds at kDeformedBytesPerTriangle, and throws MemoryBudgetError (naming
+/// the node) where it would: a lattice stretching its child a million times along an axis asked
+/// for billions of triangles and filled memory. The budget is not kept taken.
 std::shared_ptr<const MeshLeaf> deform_child_mesh(const std::shared_ptr<const Graph>& graph, NodeId ffd,
                                                   const TriangleMesh& child_mesh, double max_edge = 0.0,
-                                                  double threshold = 0.0, std::size_t* crossing = nullptr);
+                                                  double threshold = 0.0, std::size_t* crossing = nullptr,
+                                                  MemoryBudget* budget = nullptr);
+
+/// What a deformed mesh holds a triangle while it is refined and made a mesh leaf: the pass's
+/// two meshes (about 48 bytes) and the leaf (about 180: arrays, normals, Embree's hierarchy).
+inline constexpr double kDeformedBytesPerTriangle = 256.0;
 
 /// A copy of `graph` in which ffd node `ffd` carries `leaf` (node ids unchanged, supports
 /// recomputed).

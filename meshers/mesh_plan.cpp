@@ -501,7 +501,7 @@ std::shared_ptr<const TriangleMesh> Runner::execute(const Job& job, NodeReport& 
         return std::make_shared<const TriangleMesh>();
       }
       std::size_t crossing = 0;
-      auto leaf = deform_child_mesh(g, n, input(job, 0), 1.5 * h, T, &crossing);
+      auto leaf = deform_child_mesh(g, n, input(job, 0), 1.5 * h, T, &crossing, &budget_);
       std::shared_ptr<const Graph> attached;
       {
         std::lock_guard lock(graph_mutex_);

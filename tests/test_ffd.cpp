@@ -245,3 +245,25 @@ TEST(Ffd, ALatticeThatTearsTheChildEndsAndCrossesNothing) {
   EXPECT_EQ(c.self_intersecting_pairs, 0u);
   EXPECT_GT(c.triangles, 0u);
 }
+
+// A lattice that stretches its child a million times along x (the second stress run): the
+// deformed mesh's refinement asked for billions of triangles and filled memory for 71 s. It stops
+// where the budget would run out and says so, naming the node.
+TEST(Ffd, ALatticeStretchingPastTheBudgetStopsAndSaysSo) {
+  Builder b(kT);
+  const NodeId child = b.point({0, 0, 0}, {1.0});
+  const dvec3 lo(-1.2), hi(1.2);
+  auto pts = linear_lattice(lo, hi, {1, 1, 1}, {1, 1, 1});
+  for (dvec3& p : pts) p.x *= 1e6;
+  const Tree t = b.build(b.ffd(child, lo, hi, {1, 1, 1}, pts, {0.1, 1.0}));
+  MeshOptions o;
+  o.precision = 0.05;
+  MemoryBudget budget(std::size_t(64) << 20);
+  o.polygonize.budget = &budget;
+  try {
+    mesh_tree(t, o);
+    ADD_FAILURE() << "a sphere stretched to 2.4e6 meshed in 64 MiB";
+  } catch (const MemoryBudgetError& e) {
+    EXPECT_NE(std::string(e.what()).find("the deformed mesh of ffd node"), std::string::npos) << e.what();
+  }
+}

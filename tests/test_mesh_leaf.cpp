@@ -620,6 +620,18 @@ TEST(MeshErrors, InMemory) {
   m = message_of([&] { MeshLeaf::from_triangles(fan, {{0, 1, 2}, {1, 0, 3}, {0, 1, 4}}, "fan", true); });
   EXPECT_NE(m.find("non-manifold"), std::string::npos) << m;
 
+  // A shell is flat when its volume's terms cancel to rounding, whatever its proportions: a
+  // tetrahedron stretched a million times along x was called flat against its box's diagonal
+  // cubed (so was that ffd's deformed sphere, "remove it from the file", of a mesh with no file).
+  std::vector<glm::dvec3> needle = kTetra;
+  for (glm::dvec3& p : needle) p.x *= 1e6;
+  EXPECT_EQ(MeshLeaf::from_triangles(needle, kTetraFaces, "needle")->report().components, 1u);
+  std::vector<glm::dvec3> flat = needle;
+  flat[3] = {0.25e6, 0.25, 0.0};  // the apex in the base's plane
+  m = message_of([&] { MeshLeaf::from_triangles(flat, kTetraFaces, "flat"); });
+  EXPECT_NE(m.find("flat: the mesh (4 triangles, "), std::string::npos) << m;
+  EXPECT_NE(m.find("encloses no volume"), std::string::npos) << m;
+
   m = message_of([&] { MeshLeaf::from_triangles(kTetra, {}, "empty"); });
   EXPECT_NE(m.find("empty: no triangles"), std::string::npos) << m;
 
