@@ -89,6 +89,9 @@ std::optional<std::vector<std::vector<std::uint64_t>>> grid_box_pairs(std::span<
 
 bool grid_box_pairs(std::span<const dvec3> lo, std::span<const dvec3> hi, std::span<const std::uint8_t> skip,
                     const std::function<void(std::span<const std::uint64_t>)>& each, const BoxPairOptions& options) {
+  // A batch is handed over at this many pairs: one cell that many boxes meet (the hub of a fan of
+  // 20,000 long thin triangles) has the square of them, 2 GB of pairs held at once before.
+  constexpr std::size_t kBatchPairs = std::size_t(1) << 16;
   const std::optional<Grid> grid = grid_for(lo, hi, skip, options.max_cells_per_box);
   if (!grid) return false;
   const Grid& g = *grid;
@@ -147,8 +150,10 @@ bool grid_box_pairs(std::span<const dvec3> lo, std::span<const dvec3> hi, std::s
       for (std::size_t a = 0; a < s.cell.size(); ++a)
         for (std::size_t b = a + 1; b < s.cell.size(); ++b) {
           const Local &p = s.cell[a], &q = s.cell[b];
-          if (glm::max(p.first, q.first) == at && overlap(p.lo, p.hi, q.lo, q.hi))
+          if (glm::max(p.first, q.first) == at && overlap(p.lo, p.hi, q.lo, q.hi)) {
             s.found.push_back(std::uint64_t(p.box) << 32 | q.box);
+            if (s.found.size() == kBatchPairs) each(s.found), s.found.clear();
+          }
         }
     }
     if (!s.found.empty()) each(s.found);

@@ -35,8 +35,9 @@ std::optional<std::vector<std::vector<std::uint64_t>>> grid_box_pairs(std::span<
                                                                       const BoxPairOptions& options = {});
 
 /// The same pairs handed over as they are found, batch by batch (a batch: the pairs of a range of
-/// cells, in no order), to `each`, called from TBB's worker threads, several at once; nothing is
-/// stored beyond a batch. False (and no call) when the boxes are not even enough for a grid.
+/// cells, at most 65,536, in no order), to `each`, called from TBB's worker threads, several at
+/// once; nothing is stored beyond a batch. False (and no call) when the boxes are not even enough
+/// for a grid.
 bool grid_box_pairs(std::span<const glm::dvec3> lo, std::span<const glm::dvec3> hi, std::span<const std::uint8_t> skip,
                     const std::function<void(std::span<const std::uint64_t>)>& each, const BoxPairOptions& options = {});
 

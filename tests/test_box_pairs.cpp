@@ -8,6 +8,8 @@
 
 #include <algorithm>
 #include <cstdint>
+#include <mutex>
+#include <span>
 #include <random>
 #include <vector>
 
@@ -51,6 +53,36 @@ TEST(BoxPairs, GridFindsEveryOverlapOnce) {
     EXPECT_EQ(std::adjacent_find(got.begin(), got.end()), got.end()) << "a pair reported twice, trial " << trial;
     EXPECT_EQ(got, brute_force(lo, hi, skip)) << trial;
   }
+}
+
+// Boxes that all meet one cell (a fan of long thin triangles around one vertex): the square of
+// them are pairs, handed over in bounded batches (one batch held the 2 GB of a 20,000-triangle
+// fan's pairs before), each pair once.
+TEST(BoxPairs, ACrowdedCellHandsItsPairsOverInBatches) {
+  Rng rng = seeded();
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::vector<dvec3> lo, hi;
+  for (int i = 0; i < 1500; ++i) {  // long thin boxes from the origin outward
+    const dvec3 end(u(rng), u(rng), u(rng)), side = 0.01 * dvec3(u(rng), u(rng), u(rng));
+    lo.push_back(glm::min(dvec3(0.0), glm::min(end, end + side)));
+    hi.push_back(glm::max(dvec3(0.0), glm::max(end, end + side)));
+  }
+  const std::vector<std::uint8_t> skip(lo.size(), 0);
+  std::mutex m;
+  std::vector<std::uint64_t> all;
+  std::size_t largest = 0, batches = 0;
+  const bool gridded = grid_box_pairs(lo, hi, skip, [&](std::span<const std::uint64_t> batch) {
+    const std::lock_guard lock(m);
+    all.insert(all.end(), batch.begin(), batch.end());
+    largest = std::max(largest, batch.size());
+    ++batches;
+  }, BoxPairOptions{1e9, 1e9});
+  ASSERT_TRUE(gridded);
+  std::sort(all.begin(), all.end());
+  EXPECT_EQ(all, brute_force(lo, hi, skip));
+  EXPECT_EQ(all.size(), 1500u * 1499u / 2u);  // every box holds the origin
+  EXPECT_LE(largest, std::size_t(1) << 16);
+  EXPECT_GT(batches, 10u);
 }
 
 TEST(BoxPairs, SparseBoxesDecline) {
