@@ -18,6 +18,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <numbers>
 #include <numeric>
 #include <span>
@@ -151,13 +152,18 @@ void component_census(const std::vector<glm::uvec3>& T, const EdgeKeys& ek, Conc
 void geometry_census(const TriangleMesh& mesh, bool full, MeshChecks& c) {
   const auto& P = mesh.positions;
   const auto& T = mesh.triangles;
-  glm::dvec3 lo(0.0), hi(0.0);
-  if (!P.empty()) lo = hi = P[0];
+  glm::dvec3 lo(std::numeric_limits<double>::infinity()), hi(-lo);
   for (const auto& p : P) {
+    if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z)) {
+      ++c.nonfinite_vertices;
+      continue;
+    }
     lo = glm::min(lo, p);
     hi = glm::max(hi, p);
   }
+  if (lo.x > hi.x) lo = hi = glm::dvec3(0.0);  // no finite vertex
   const double scale = std::max(glm::length(hi - lo), 1e-300);
+  const glm::dvec3 centre = 0.5 * (lo + hi);
   std::vector<double> area2(T.size());
   tbb::parallel_for(std::size_t(0), T.size(), [&](std::size_t i) {
     const glm::uvec3& t = T[i];
@@ -172,7 +178,8 @@ void geometry_census(const TriangleMesh& mesh, bool full, MeshChecks& c) {
   tbb::parallel_for(std::size_t(0), T.size(), [&](std::size_t i) {
     const glm::uvec3& t = T[i];
     const glm::dvec3 a = P[t[0]], b = P[t[1]], d = P[t[2]];
-    volume6[i] = glm::dot(a, glm::cross(b, d));
+    // About the box's centre: about the origin, a box at 1e6 summed to -15499 for 2.
+    volume6[i] = glm::dot(a - centre, glm::cross(b - centre, d - centre));
     amin[i] = smallest_angle(a, b, d);
     smallest[i] = float(amin[i]);
   });
@@ -397,6 +404,21 @@ std::vector<std::uint8_t> kept_leaf_triangles(const TriangleMesh& mesh, const Gr
   std::size_t budget = 4096;  // node visits: a tree that shares subtrees is walked once a path
   leaf_corners(graph, root, affines, corners, budget);
   return kept_leaf_triangles(mesh, std::move(corners));
+}
+
+std::string describe_defects(const MeshChecks& c) {
+  std::string why;
+  auto add = [&](std::size_t n, const char* what) {
+    if (n) why += (why.empty() ? "" : ", ") + std::to_string(n) + " " + what;
+  };
+  add(c.nonfinite_vertices, "vertices not finite");
+  add(c.boundary_edges, "boundary edges");
+  add(c.nonmanifold_edges, "non-manifold edges");
+  add(c.nonmanifold_vertices, "non-manifold vertices");
+  add(c.misoriented_edges, "misoriented edges");
+  add(c.degenerate_triangles, "degenerate triangles");
+  add(c.self_intersecting_pairs, "self-intersecting triangle pairs");
+  return why;
 }
 
 }  // namespace ht

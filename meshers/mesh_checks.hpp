@@ -12,6 +12,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <span>
+#include <string>
 #include <vector>
 
 namespace ht {
@@ -26,6 +27,7 @@ struct MeshChecks {
   std::size_t misoriented_edges = 0;    ///< two triangles traverse it the same way
   std::size_t nonmanifold_vertices = 0; ///< whose triangles form more than one fan
   std::size_t degenerate_triangles = 0; ///< zero area (relative to the mesh's size)
+  std::size_t nonfinite_vertices = 0;   ///< a coordinate NaN or infinite
   std::size_t unused_vertices = 0;
   std::size_t components = 0;
   long euler = 0;                       ///< V - E + F over the used vertices
@@ -62,8 +64,10 @@ struct MeshChecks {
   bool closed() const { return boundary_edges == 0; }
   bool manifold() const { return nonmanifold_edges == 0 && nonmanifold_vertices == 0; }
   bool oriented() const { return misoriented_edges == 0; }
-  /// Closed, manifold, oriented, no degenerate triangle: what every mesher must return.
-  bool watertight() const { return closed() && manifold() && oriented() && degenerate_triangles == 0; }
+  /// Closed, manifold, oriented, finite, no degenerate triangle: what every mesher must return.
+  bool watertight() const {
+    return closed() && manifold() && oriented() && degenerate_triangles == 0 && nonfinite_vertices == 0;
+  }
   /// No self-intersecting pair. Separate from watertight(), which is about topology.
   bool intersection_free() const { return self_intersecting_pairs == 0; }
 };
@@ -78,6 +82,10 @@ MeshChecks check_mesh(const TriangleMesh& mesh, bool self_intersections = true);
 /// and the counts of vertices, triangles and unused vertices; the other fields stay 0. What the
 /// mesh plan asks of every strategy's result, at a fraction of check_mesh()'s cost.
 MeshChecks check_watertight(const TriangleMesh& mesh);
+
+/// What keeps `c` from watertight() and intersection_free(), as "462 boundary edges, 3
+/// self-intersecting triangle pairs"; empty when nothing does.
+std::string describe_defects(const MeshChecks& c);
 
 /// How far grad f turns across a triangle that MeshChecks counts as a crease triangle.
 inline constexpr double kCreaseTurnDegrees = 30.0;

@@ -224,17 +224,7 @@ std::string local_defect(const TriangleMesh& m, const LocalStats& local) {
   if (m.triangles.empty() && local.operand_triangles > 0) return "no triangles from non-empty operands";
   MeshChecks c = check_watertight(m);
   c.self_intersecting_pairs = local.self_intersections;
-  std::string why;
-  auto add = [&](std::size_t n, const char* what) {
-    if (n) why += (why.empty() ? "" : ", ") + std::to_string(n) + " " + what;
-  };
-  add(c.boundary_edges, "boundary edges");
-  add(c.nonmanifold_edges, "non-manifold edges");
-  add(c.nonmanifold_vertices, "non-manifold vertices");
-  add(c.misoriented_edges, "misoriented edges");
-  add(c.degenerate_triangles, "degenerate triangles");
-  add(c.self_intersecting_pairs, "self-intersecting triangle pairs");
-  return why;
+  return describe_defects(c);
 }
 
 // The global polygonizer's result when it is not what every mesher must return: how many

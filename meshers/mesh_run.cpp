@@ -43,6 +43,18 @@ void check_precision(const Tree& tree, double precision) {
 
 namespace {
 
+// Every mesher returns a closed, oriented manifold with finite vertices; where one did not (a
+// scene whose numbers pass what it handles: a disc of radius 1e150 swept open, a normal of 1e155
+// squared past doubles into NaN vertices), the run stops rather than return it.
+void refuse_broken(const MeshChecks& c) {
+  if (c.triangles == 0 || c.watertight()) return;
+  MeshChecks topology = c;
+  topology.self_intersecting_pairs = 0;  // reported, not refused (a warning on the command line)
+  throw PolygonizeError("the mesh made is no closed manifold (" + describe_defects(topology) +
+                        "): a number of the scene's is past what the meshers handle (a radius, normal, rate or "
+                        "threshold of extreme size?); nothing was written");
+}
+
 MeshStrategy strategy_of(const std::string& name) {
   return name == "global" ? MeshStrategy::Global : name == "local" ? MeshStrategy::Local : MeshStrategy::Auto;
 }
@@ -156,6 +168,7 @@ nlohmann::json checks_json(const MeshChecks& c) {
           {"nonmanifold_vertices", c.nonmanifold_vertices},
           {"misoriented_edges", c.misoriented_edges},
           {"degenerate_triangles", c.degenerate_triangles},
+          {"nonfinite_vertices", c.nonfinite_vertices},
           {"components", c.components},
           {"euler_characteristic", c.euler},
           {"genus", c.genus},
@@ -213,6 +226,7 @@ MeshRun run_mesh(const Tree& tree, const MeshRunOptions& o) {
   const auto t2 = clock::now();
   const TriangleMesh& mesh = *run.result.mesh;
   run.checks = check_mesh(mesh, o.full_checks);
+  refuse_broken(run.checks);
   if (!mesh.triangles.empty() && o.full_checks) {
     // On tapes specialized to bricks of sixteen cells (as the local strategies'; eight compiles
     // twice the bricks for little shorter tapes): a big tree's root tape would pay for every

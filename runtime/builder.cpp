@@ -31,9 +31,12 @@ void push3(std::vector<double>& out, const glm::dvec3& v) {
 }
 glm::dvec3 unit_normal(const std::string& key, const glm::dvec3& n) {
   require_finite(key, n);
-  const double len = glm::length(n);
-  if (!(len > 0.0)) throw BuildError(key, "must be a non-zero vector");
-  return n / len;
+  // Scaled by its largest component first: the squares of 1e155 pass doubles (NaN vertices), and
+  // those of 1e-170 vanish.
+  const double big = std::max({std::abs(n.x), std::abs(n.y), std::abs(n.z)});
+  if (!(big > 0.0)) throw BuildError(key, "must be a non-zero vector");
+  const glm::dvec3 m = n / big;
+  return m / glm::length(m);
 }
 void check_falloff(const Falloff& f) {
   require_positive("radius", f.radius);

@@ -221,7 +221,8 @@ class Loader {
       }
       const double degrees = r.number("degrees");
       r.finish();
-      m = glm::rotate(m, glm::radians(degrees), glm::normalize(axis));
+      const double big = std::max({std::abs(axis.x), std::abs(axis.y), std::abs(axis.z)});  // as a normal's
+      m = glm::rotate(m, glm::radians(degrees), glm::normalize(axis / big));
     }
     if (o.has("scale")) {
       const json& s = o.get("scale");

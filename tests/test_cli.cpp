@@ -204,6 +204,15 @@ TEST(Cli, MeshRefusesCleanlyAndLeavesNoFile) {
   EXPECT_EQ(far.code, 2);
   EXPECT_NE(far.err.find("the solid lies 1e+17 from the origin, where doubles step by 16: precision"), std::string::npos)
       << far.err;
+  // A result that is no closed manifold is refused, not written: a disc of radius 1e150 (the
+  // sweep left 462 boundary edges) and a curve of radius 1e-200 (every vertex NaN), both exit 0
+  // before, from an extreme-value campaign.
+  for (const char* scene : {"open_disc_radius_1e150.json", "nan_curve_radius_1e-200.json"}) {
+    const auto broken = test::run_cli("mesh " + (std::filesystem::path(HYBRIDTREE_SOURCE_DIR) / "tests/data/stress" / scene).string() +
+                                      " -o " + (dir / "m.ply").string());
+    EXPECT_EQ(broken.code, 2) << scene;
+    EXPECT_NE(broken.err.find("the mesh made is no closed manifold ("), std::string::npos) << broken.err;
+  }
   // Nothing but the four scenes is left in the folder: no partial output.
   std::size_t files = 0;
   for ([[maybe_unused]] const auto& e : std::filesystem::directory_iterator(dir)) ++files;

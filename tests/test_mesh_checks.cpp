@@ -135,6 +135,20 @@ namespace {
 // twice makes a side from a vertex to itself), with that side's direction and slot, ordered by
 // lower then upper vertex; on soups small and large (thousands of sides under one vertex), where
 // edges are shared by one, two or more sides.
+// A vertex that is not finite makes a mesh no watertight one, in the lean check too; the volume
+// is summed about the mesh's box (about the origin, a unit box at 1e6 measured -15499).
+TEST(MeshChecks, NonFiniteVerticesAndFarVolumes) {
+  TriangleMesh t = tetrahedron();
+  const double volume = check_mesh(t).volume;
+  for (glm::dvec3& p : t.positions) p += glm::dvec3(1e6, -2e6, 3e6);
+  EXPECT_NEAR(check_mesh(t).volume, volume, 1e-9 * std::abs(volume));
+  t.positions[1].y = std::numeric_limits<double>::quiet_NaN();
+  for (const MeshChecks& c : {check_mesh(t), check_watertight(t)}) {
+    EXPECT_EQ(c.nonfinite_vertices, 1u);
+    EXPECT_FALSE(c.watertight());
+  }
+}
+
 TEST(MeshChecks, BoundaryEdgesAreTheEdgesOneSideLiesOn) {
   test::Rng rng = test::seeded();
   std::size_t found = 0;

@@ -174,6 +174,21 @@ TEST(Scene, AStretchFarFromSingularLoads) {
   EXPECT_EQ(v[3], 0.0);
 }
 
+// Normals and axes of extreme size are unit vectors all the same: a circle's normal of 1e155
+// squared past doubles and made every vertex of its sweep NaN.
+TEST(Scene, HugeAndTinyNormalsAreUnitVectors) {
+  for (const char* n : {"1e155", "1e300", "1e-170", "5e-324"}) {
+    const Tree t = load_scene_text(scene(R"({"type": "circle", "center": [0,0,0], "normal": [0, 0, )" + std::string(n) +
+                                         R"(], "circle_radius": 1, "radius": 0.4})"),
+                                   ".");
+    const std::vector<glm::dvec3> at = {{1, 0, 0}, {0, 0, 1}};
+    std::vector<double> v(at.size());
+    t.evaluator().field(at, v);
+    EXPECT_GT(v[0], 0.5) << n;  // on the circle
+    EXPECT_EQ(v[1], 0.0) << n;  // on its axis, beyond the radius
+  }
+}
+
 TEST(Scene, DeepNestingIsAnErrorNotACrash) {
   std::string text = kPoint;
   for (int i = 0; i < kMaxSceneDepth + 5; ++i) text = R"({"type": "blend", "children": [)" + text + "]}";
