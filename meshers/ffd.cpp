@@ -63,9 +63,13 @@ std::shared_ptr<const MeshLeaf> deform_child_mesh(const std::shared_ptr<const Gr
     WarpRemeshStats ws;
     mesh = warp_mesh(child_mesh, forward_map(g, n), &child_field, threshold, max_edge, &ws, nullptr, {}, room,
                      kFfdTearStretch);
-    if (ws.stopped)  // throws: more than `room` triangles pass what is left
-      budget->take(kDeformedBytesPerTriangle * (double(room) + 1.0),
-                   "the deformed mesh of ffd node " + g.label(n) + " (more than " + std::to_string(room) + " triangles)");
+    if (ws.stopped) {
+      const double bytes = kDeformedBytesPerTriangle * (double(room) + 1.0);
+      throw MemoryBudgetError("the deformed mesh of ffd node " + g.label(n) + " (more than " + std::to_string(room) +
+                                  " triangles) needs " + format_bytes(bytes) + ", over the memory budget of " +
+                                  format_bytes(double(budget->limit())),
+                              std::size_t(bytes), budget->in_use(), budget->limit());
+    }
   } else {
     mesh = child_mesh;
     const double* params = g.params_of(n).data();

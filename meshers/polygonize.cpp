@@ -477,7 +477,7 @@ std::string unresolvable_precision(const Aabb& solid, double precision) {
   const double far = std::max({std::abs(solid.lo.x), std::abs(solid.lo.y), std::abs(solid.lo.z), std::abs(solid.hi.x),
                                std::abs(solid.hi.y), std::abs(solid.hi.z)});
   const double step = std::nextafter(far, std::numeric_limits<double>::infinity()) - far;
-  if (!(far < std::numeric_limits<double>::max()) || precision >= kCoordinateSteps * step) return {};
+  if (!std::isfinite(far) || precision >= kCoordinateSteps * step) return {};
   char buf[320];
   std::snprintf(buf, sizeof buf,
                 "the solid lies %.3g from the origin, where doubles step by %.3g: precision %g cannot be resolved "
@@ -512,6 +512,7 @@ TriangleMesh polygonize(std::shared_ptr<const Graph> graph, NodeId root, double 
   RetryRequest none;  // a run with locks asks for no other
   mesh = polygonize_once(std::move(graph), root, T, again, retry.boxes, none, &second);
   const bool better = retry.crossing || (second.folds.pairs_after < first.folds.pairs_after &&
+                                         second.crease_intersections <= first.crease_intersections &&
                                          smallest_angle(mesh) >= kKeptAngleShare * smallest_angle(kept));
   PolygonizeStats& taken = better ? second : first;
   const PolygonizeStats& other = better ? first : second;

@@ -121,7 +121,8 @@ struct PolygonizeError : std::runtime_error {
 
 /// A cell must hold at least this many steps of doubles at the solid's farthest coordinate: a
 /// finer precision cannot place the grid's points apart (a point translated by 1e17, where doubles
-/// step by 16, sent the brick classification into endless subdivision at h = 0.03).
+/// step by 16, sent the brick classification into endless subdivision at h = 0.03; a unit ball at
+/// 1e9, 2.9e5 steps a cell, came out of the global polygonizer with 1,038 boundary edges).
 inline constexpr double kCoordinateSteps = 1e6;
 
 /// The message for a precision below what doubles resolve where `solid` lies, or empty when

@@ -322,17 +322,19 @@ void check_volumes(const std::string& name, const std::vector<glm::dvec3>& pos, 
   std::vector<Aabb> box(shells.count);
   for (std::uint32_t t = 0; t < tris.size(); ++t)
     for (int k = 0; k < 3; ++k) box[shells.of[t]].grow(pos[tris[t][k]]);
-  // The signed volume against the sum of its terms' sizes, which bounds its rounding: a shell is
-  // flat when its terms cancel to rounding. (Against the box's diagonal cubed, an ellipsoid that
-  // an ffd stretched a million times along one axis was called flat.)
+  // The signed volume against the sum of its terms' bounds (each triple product's six products
+  // taken in absolute value), which bounds its rounding: a shell is flat when its volume is within
+  // rounding of 0. (Against the box's diagonal cubed, an ellipsoid that an ffd stretched a million
+  // times along one axis was called flat; against the sum of the terms themselves, a flat
+  // parallelogram through the box's centre, every term rounding noise, was not.)
   std::vector<double> volume(shells.count, 0.0), terms(shells.count, 0.0);
   std::vector<std::size_t> count(shells.count, 0);
   for (std::uint32_t t = 0; t < tris.size(); ++t) {
     const std::uint32_t s = shells.of[t];
     const glm::dvec3 o = box[s].center(), a = pos[tris[t][0]] - o, b = pos[tris[t][1]] - o, c = pos[tris[t][2]] - o;
-    const double v = glm::dot(a, glm::cross(b, c)) / 6.0;
-    volume[s] += v;
-    terms[s] += std::abs(v);
+    const glm::dvec3 A = glm::abs(a), B = glm::abs(b), C = glm::abs(c);
+    volume[s] += glm::dot(a, glm::cross(b, c)) / 6.0;
+    terms[s] += (A.x * (B.y * C.z + B.z * C.y) + A.y * (B.x * C.z + B.z * C.x) + A.z * (B.x * C.y + B.y * C.x)) / 6.0;
     ++count[s];
   }
   for (std::uint32_t s = 0; s < shells.count; ++s) {
@@ -492,7 +494,10 @@ std::shared_ptr<MeshLeaf> MeshLeaf::build(std::vector<glm::dvec3> positions,
     std::vector<std::uint32_t> copied;
     report.pinched_vertices = split_pinched_vertices(triangles, topo, positions.size(), split, copied);
     if (report.pinched_vertices > 0) {
-      auto apart = std::make_shared<TriangleMesh>(TriangleMesh{positions, std::move(split)});
+      auto apart = std::make_shared<TriangleMesh>();
+      apart->positions.reserve(positions.size() + copied.size());
+      apart->positions = positions;
+      apart->triangles = std::move(split);
       for (const std::uint32_t v : copied) apart->positions.push_back(positions[v]);
       leaf->manifold_ = std::move(apart);
     }

@@ -217,7 +217,8 @@ class Loader {
         else throw Fail{r.at("axis"), "must be \"x\", \"y\", \"z\" or a vector"};
       } else {
         axis = Obj::as_vec3(a, r.at("axis"));
-        if (!(glm::length(axis) > 0.0)) throw Fail{r.at("axis"), "must be a non-zero vector"};
+        if (!(std::max({std::abs(axis.x), std::abs(axis.y), std::abs(axis.z)}) > 0.0))
+          throw Fail{r.at("axis"), "must be a non-zero vector"};
       }
       const double degrees = r.number("degrees");
       r.finish();
