@@ -464,7 +464,11 @@ std::shared_ptr<const TriangleMesh> Runner::execute(const Job& job, NodeReport& 
       WarpRemeshStats ws;
       const TriangleMesh& child = input(job, 0);
       const auto warp = forward_map(*g, n);
-      const std::size_t cap = warp_cap(child, warp, 1.5 * h);
+      // Refined no further than the budget has room for: a twist of rate 1.7e308 stretches every
+      // edge past any count the area predicts (an infinite area caps nothing) and filled memory.
+      const std::size_t room =
+          std::size_t(double(budget_.limit() - std::min(budget_.in_use(), budget_.limit())) / kWarpedBytesPerTriangle);
+      const std::size_t cap = std::min(warp_cap(child, warp, 1.5 * h), room);
       auto mesh = std::make_shared<const TriangleMesh>(warp_mesh(child, warp, &child_field, T, 1.5 * h, &ws, nullptr, {}, cap));
       r.edges_split = ws.edges_split;
       if (ws.stopped) {

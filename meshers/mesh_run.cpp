@@ -24,6 +24,7 @@ double default_precision(const Tree& tree, double requested) {
 void check_precision(const Tree& tree, double precision) {
   const Aabb solid = solid_bounds(tree.graph(), tree.root(), tree.threshold());
   if (solid.empty()) return;
+  if (const std::string why = unmeshable_extent(solid); !why.empty()) throw PolygonizeError(why);
   if (const std::string why = unresolvable_precision(solid, precision); !why.empty()) throw PolygonizeError(why);
   if (!solid.finite()) return;
   const double across = glm::length(solid.size());
@@ -204,6 +205,15 @@ MeshRun run_mesh(const Tree& tree, const MeshRunOptions& o) {
   MeshOptions& options = run.options;
   options.precision = default_precision(tree, o.precision);
   check_precision(tree, options.precision);
+  // A tree whose numbers the tape cannot hold is refused before any meshing (a twist of rate
+  // 1.7e308 refined its warped mesh for 10 s first). An ffd not yet meshed stops the compiler
+  // too; the tape is compiled again where it is needed.
+  try {
+    (void)compile_tape(tree.graph_ptr(), tree.root(), tree.threshold());
+  } catch (const FloatRangeError&) {
+    throw;
+  } catch (const CompileError&) {
+  }
   // More GiB than size_t holds in bytes (--memory-budget 1e12) is no limit: the cast alone was
   // undefined and gave 0 bytes.
   const double bytes = o.memory_gib * double(1u << 30);

@@ -21,8 +21,9 @@ namespace ht {
 /// 1/100 of its solid's size (1 for an unbounded or empty solid).
 double default_precision(const Tree& tree, double requested);
 
-/// Throws PolygonizeError (saying what to use instead) when `precision` is finer than doubles
-/// resolve where the solid lies (meshers/polygonize.hpp unresolvable_precision) or coarser than the box
+/// Throws PolygonizeError (saying what to use instead) when the solid reaches past kMaxCoordinate
+/// (meshers/polygonize.hpp unmeshable_extent), when `precision` is finer than doubles resolve
+/// where the solid lies (unresolvable_precision) or coarser than the box
 /// the scene's solid lies in is across: no part of the surface could be resolved, and the mesh
 /// would come out empty or meaningless. run_mesh() checks it.
 void check_precision(const Tree& tree, double precision);

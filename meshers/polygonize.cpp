@@ -157,6 +157,7 @@ TriangleMesh polygonize_once(std::shared_ptr<const Graph> graph, NodeId root, do
     if (stats_out) *stats_out = stats;
     return mesh;
   }
+  if (const std::string why = unmeshable_extent(solid); !why.empty()) throw PolygonizeError(why);
   if (const std::string why = unresolvable_precision(solid, h); !why.empty()) throw PolygonizeError(why);
   if (!solid.finite()) throw PolygonizeError("the solid {f >= T} cannot be bounded (is a blend over R-function differences?)");
   const bool clipped = !options.clip.empty();
@@ -483,6 +484,18 @@ std::string unresolvable_precision(const Aabb& solid, double precision) {
                 "the solid lies %.3g from the origin, where doubles step by %.3g: precision %g cannot be resolved "
                 "there (use at least %.3g, or move the scene nearer the origin)",
                 far, step, precision, kCoordinateSteps * step);
+  return buf;
+}
+
+std::string unmeshable_extent(const Aabb& solid) {
+  const double far = std::max({std::abs(solid.lo.x), std::abs(solid.lo.y), std::abs(solid.lo.z), std::abs(solid.hi.x),
+                               std::abs(solid.hi.y), std::abs(solid.hi.z)});
+  if (!std::isfinite(far) || far <= kMaxCoordinate) return {};
+  char buf[256];
+  std::snprintf(buf, sizeof buf,
+                "the solid reaches %.3g from the origin: HybridTree meshes solids within %.0e of it (a radius, "
+                "scale or offset of extreme size?)",
+                far, kMaxCoordinate);
   return buf;
 }
 

@@ -130,6 +130,14 @@ inline constexpr double kCoordinateSteps = 1e6;
 /// coordinate.
 std::string unresolvable_precision(const Aabb& solid, double precision);
 
+/// How far from the origin a solid may reach: the exact checks (meshers/self_intersections.hpp)
+/// multiply three coordinates, which past about 1e102 overflow doubles (a tapered cylinder of
+/// radius 1e150 spent minutes in those checks on infinite products).
+inline constexpr double kMaxCoordinate = 1e100;
+
+/// The message for a solid that reaches farther than kMaxCoordinate from the origin, or empty.
+std::string unmeshable_extent(const Aabb& solid);
+
 /// Thrown when a run is cancelled through its cancellation flag.
 struct MeshCancelled : PolygonizeError {
   using PolygonizeError::PolygonizeError;

@@ -52,6 +52,11 @@ TriangleMesh warp_mesh(const TriangleMesh& child_mesh, const std::function<glm::
                        std::size_t max_triangles = std::numeric_limits<std::size_t>::max(),
                        double max_relative_stretch = std::numeric_limits<double>::infinity());
 
+/// What refining a warped mesh holds a triangle at its peak (both copies of the positions, the
+/// triangles, a pass's long edges, midpoints and their table), rounded up: the mesh plan caps
+/// max_triangles at what its memory budget has room for at this rate.
+inline constexpr double kWarpedBytesPerTriangle = 256.0;
+
 /// The forward map of warp node `node` (affine, twist, taper, bend or ffd).
 std::function<glm::dvec3(const glm::dvec3&)> forward_map(const Graph& graph, NodeId node);
 

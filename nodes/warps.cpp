@@ -284,8 +284,19 @@ Aabb warp_bounds(NodeKind kind, const double* s, const Aabb& box) {
         constexpr double kQuarter = std::numbers::pi / 2;
         const double a0 = k * std::clamp(local.lo.x, h0, h1), a1 = k * std::clamp(local.hi.x, h0, h1);
         const double amin = std::min(a0, a1), amax = std::max(a0, a1);
-        for (double q = std::ceil(amin / (kQuarter)) * (kQuarter); q <= amax; q += kQuarter)
-          us.push_back(q / k);
+        // A whole turn or more, or angles so large that doubles no longer step finely along
+        // them: the bent part lies in the annulus about the centre of curvature (0, 1/k), whose
+        // box is that of the disc of its outer radius. Listing the quarter turns instead took
+        // memory in proportion to the rate (1e9: 2 GB, then bad_alloc).
+        if (!(amax - amin < 2 * std::numbers::pi && std::abs(amin) < 1e6 && std::abs(amax) < 1e6)) {
+          const double c = 1.0 / k;
+          const double r = std::max(std::abs(c - local.lo.y), std::abs(c - local.hi.y));
+          for (double u : {-r, r})
+            for (double v : {c - r, c + r})
+              for (double w : {local.lo.z, local.hi.z}) out.grow(f.to_world({u, v, w}));
+        } else {
+          for (double q = std::ceil(amin / kQuarter) * kQuarter; q <= amax; q += kQuarter) us.push_back(q / k);
+        }
       }
       for (double u : us)
         for (double v : {local.lo.y, local.hi.y})

@@ -123,6 +123,11 @@ inline constexpr int kCurveGroup = 8;
 struct CompileError : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
+/// Thrown when a node's field needs a number past the float range the tape computes in (a twist
+/// rate of 4e38): the tape would say otherwise than the tree.
+struct FloatRangeError : CompileError {
+  using CompileError::CompileError;
+};
 
 struct Tape {
   std::vector<Instruction> code;

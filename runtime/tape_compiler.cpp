@@ -181,6 +181,19 @@ class Compiler {
     for (double v : values) tape_.constants.push_back(static_cast<float>(v));
     return at;
   }
+  // The constants of node n's field: each must hold as a float, the tape's arithmetic (a twist
+  // rate of 4e38 became infinite there, and the tape said 0 where the tree said 1).
+  std::uint32_t constants(NodeId n, std::initializer_list<double> values) {
+    for (double v : values) check_float(n, v);
+    return constants(values);
+  }
+  void check_float(NodeId n, double v) const {
+    if (!std::isfinite(v) || std::isfinite(static_cast<float>(v))) return;
+    char buf[96];
+    std::snprintf(buf, sizeof buf, "%.3g", v);
+    throw FloatRangeError("node " + g_.label(n) + ": its field needs the number " + buf +
+                       ", beyond the float range (3.4e38) the field tape evaluates in (a parameter of extreme size?)");
+  }
   // An instruction with register operands.
   void emit(OpCode op, int out, int a = 0, int b = 0) { push(Instruction::make(op, out, a, b), kNone); }
   void push(const Instruction& ins, NodeId from) {
@@ -200,9 +213,9 @@ class Compiler {
     const double R = prim.R, F = prim.F;
     const double* s = g_.skeleton_of(n);
     // Common header: R^2, 1/R^2, F, R; the skeleton follows (layouts in runtime/tape_ops.hpp).
-    const std::uint32_t k = constants({R * R, 1.0 / (R * R), F, R});
+    const std::uint32_t k = constants(n, {R * R, 1.0 / (R * R), F, R});
     auto v = [&](int i) { return glm::dvec3(s[i], s[i + 1], s[i + 2]); };
-    auto push3 = [&](const glm::dvec3& q) { constants({q.x, q.y, q.z}); };
+    auto push3 = [&](const glm::dvec3& q) { constants(n, {q.x, q.y, q.z}); };
     OpCode op = OpCode::Point;
     switch (g_.kind[n]) {
       case NodeKind::Point: push3(v(0)); op = OpCode::Point; break;
@@ -211,7 +224,7 @@ class Compiler {
         const double len2 = glm::dot(ab, ab);
         push3(a);
         push3(ab);
-        constants({len2 > 0 ? 1.0 / len2 : 0.0});
+        constants(n, {len2 > 0 ? 1.0 / len2 : 0.0});
         op = OpCode::Segment;
         break;
       }
@@ -219,7 +232,7 @@ class Compiler {
       case NodeKind::Disc:
         push3(v(0));
         push3(v(3));
-        constants({s[6]});
+        constants(n, {s[6]});
         op = g_.kind[n] == NodeKind::Circle ? OpCode::Circle : OpCode::Disc;
         break;
       case NodeKind::Triangle: {
@@ -236,7 +249,7 @@ class Compiler {
         push3(glm::cross(cb, nor));
         push3(glm::cross(ac, nor));
         push3(nor);
-        constants({inv(glm::dot(ba, ba)), inv(glm::dot(cb, cb)), inv(glm::dot(ac, ac)), inv(glm::dot(nor, nor))});
+        constants(n, {inv(glm::dot(ba, ba)), inv(glm::dot(cb, cb)), inv(glm::dot(ac, ac)), inv(glm::dot(nor, nor))});
         op = OpCode::Triangle;
         break;
       }
@@ -248,7 +261,7 @@ class Compiler {
         const Aabb support = skeleton_bounds(NodeKind::Curve, s).expanded(R);
         push3(support.lo);
         push3(support.hi);
-        constants({static_cast<double>(segments)});
+        constants(n, {static_cast<double>(segments)});
         // The box of each group of kCurveGroup segments: a chunk of points skips the groups
         // that lie farther than what it has already found.
         std::vector<Aabb> boxes;
@@ -271,14 +284,14 @@ class Compiler {
           const double reach = (R + 0.5 * glm::length(boxes[g].size())) * (1.0 + 1e-4) +
                                1e-5 * (1.0 + std::max({std::abs(c.x), std::abs(c.y), std::abs(c.z)}));
           push3(c);
-          constants({reach * reach});
+          constants(n, {reach * reach});
         }
         for (std::size_t i = 0; i < segments; ++i) {
           const glm::dvec3 a = v(1 + 3 * static_cast<int>(i)), ab = end(i) - a;
           const double len2 = glm::dot(ab, ab);
           push3(a);
           push3(ab);
-          constants({len2 > 0 ? 1.0 / len2 : 0.0});
+          constants(n, {len2 > 0 ? 1.0 / len2 : 0.0});
         }
         op = OpCode::Curve;
         break;
@@ -293,7 +306,7 @@ class Compiler {
         const double len = glm::length(axis);
         push3(a);
         push3(axis / len);
-        constants({len, s[6]});
+        constants(n, {len, s[6]});
         op = OpCode::Cylinder;
         break;
       }
@@ -303,12 +316,12 @@ class Compiler {
         if (len <= std::abs(ra - rb)) {  // one sphere holds the other: flag 1, the big sphere
           const bool a_big = ra >= rb;
           push3(a_big ? a : b);
-          constants({0, 0, 0, 0, a_big ? ra : rb, 0, 0, 0, 1});
+          constants(n, {0, 0, 0, 0, a_big ? ra : rb, 0, 0, 0, 1});
         } else {
           const double sn = (ra - rb) / len;
           push3(a);
           push3((b - a) / len);
-          constants({len, ra, rb, sn, std::sqrt(1 - sn * sn), 0});
+          constants(n, {len, ra, rb, sn, std::sqrt(1 - sn * sn), 0});
         }
         op = OpCode::ConeSphere;
         break;
@@ -326,7 +339,7 @@ class Compiler {
     const auto index = static_cast<int>(it - tape_.meshes.begin());
     if (it == tape_.meshes.end()) tape_.meshes.push_back(leaf);
     // F, kernel radius R', r0, query radius, the mesh's index in the tape's table.
-    const std::uint32_t k = constants({mp.F, mp.kernel_radius, mp.r0, mp.query_radius, static_cast<double>(index)});
+    const std::uint32_t k = constants(n, {mp.F, mp.kernel_radius, mp.r0, mp.query_radius, static_cast<double>(index)});
     const int out = alloc_scalar();
     emit_k(OpCode::Mesh, n, out, frame, k);
     return out;
@@ -344,12 +357,13 @@ class Compiler {
     switch (k) {
       case NodeKind::Affine:
         at = static_cast<std::uint32_t>(tape_.constants.size());
+        for (int i = 12; i < 24; ++i) check_float(n, p[i]);
         for (int i = 12; i < 24; ++i) tape_.constants.push_back(static_cast<float>(p[i]));
         op = OpCode::Affine;
         break;
-      case NodeKind::Twist: at = constants({p[0], p[1], p[2], p[3], p[4]}); op = OpCode::Twist; break;
-      case NodeKind::Taper: at = constants({p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7]}); op = OpCode::Taper; break;
-      default: at = constants({p[0], p[1], p[2], p[3], p[4], p[5], p[6]}); op = OpCode::Bend; break;
+      case NodeKind::Twist: at = constants(n, {p[0], p[1], p[2], p[3], p[4]}); op = OpCode::Twist; break;
+      case NodeKind::Taper: at = constants(n, {p[0], p[1], p[2], p[3], p[4], p[5], p[6], p[7]}); op = OpCode::Taper; break;
+      default: at = constants(n, {p[0], p[1], p[2], p[3], p[4], p[5], p[6]}); op = OpCode::Bend; break;
     }
     const int inner = alloc_frame();
     const std::size_t mark = tape_.code.size();
@@ -504,7 +518,7 @@ class Compiler {
     if (child == kNoValue) return kNoValue;
     const glm::dvec3 centre = c.box.center(), half = 0.5 * c.box.size();
     const std::uint32_t k =
-        constants({centre.x, centre.y, centre.z, half.x, half.y, half.z, T_ / crop_reach(c.box6), T_});
+        constants(n, {centre.x, centre.y, centre.z, half.x, half.y, half.z, T_ / crop_reach(c.box6), T_});
     emit_k(OpCode::Crop, n, child, frame, k);  // in place
     return child;
   }

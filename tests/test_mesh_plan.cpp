@@ -144,6 +144,20 @@ TEST(MeshPlan, AWarpThatStretchesWithoutEndIsPolygonized) {
   EXPECT_EQ(c.genus, 0);
   const double r0 = 0.4542;  // the ball's surface at T = 0.5, F = 1
   EXPECT_NEAR(c.volume, 4.0 / 3.0 * 3.14159265358979 * r0 * r0 * r0, 0.03 * c.volume);
+  // The cap is also what the run's memory budget has room for (kWarpedBytesPerTriangle a
+  // triangle): a twist of rate 1.7e308 stretched every edge past any count its infinite area
+  // predicts and filled 4 GB refining. Under 8 MiB the cap is at most 32,768 triangles, less
+  // than the area allows here, and the fallback still meshes the ball.
+  MeshOptions tight = test::mesh_options(0.1);
+  tight.polygonize.memory_budget = std::size_t(8) << 20;
+  const MeshResult small = mesh_tree(twisted, tight);
+  const std::string& cause = small.nodes.back().fallback_cause;
+  const std::size_t at = cause.find("more than ");
+  ASSERT_NE(at, std::string::npos) << cause;
+  const double cap = std::stod(cause.substr(at + 10));
+  EXPECT_LE(cap, 32768.0) << cause;
+  EXPECT_LT(cap, std::stod(root.fallback_cause.substr(root.fallback_cause.find("more than ") + 10))) << cause;
+  EXPECT_TRUE(check_mesh(*small.mesh).watertight());
   // The warp alone: the cap is a pass's triangles, never exceeded.
   const TriangleMesh sphere = sweep_mesh(twisted.graph(), ball, kT, 0.1);
   WarpRemeshStats ws;

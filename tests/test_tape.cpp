@@ -369,6 +369,31 @@ TEST(Tape, FfdCannotCompileYet) {
   EXPECT_THROW(compile_tape(t.graph_ptr(), f, kT), CompileError);
 }
 
+// The tape computes in floats: a parameter past their range became infinite there, and a ball
+// twisted at a rate of 4e38 was 0 in the tape and 1 in the tree (meshed as empty). Such a tree is
+// refused by the compiler, naming the node; just inside the range it compiles and agrees.
+TEST(Tape, NumbersPastTheFloatRangeAreRefused) {
+  for (double rate : {3e38, 4e38, -1e39}) {
+    Builder b(kT);
+    const Tree t = b.build(b.twist(b.point({0, 0, 0}, {1}), Axis::Z, {0, 0, 0}, rate));
+    if (std::abs(rate) < 3.4e38) {
+      const TapeEvaluator e(std::make_shared<const Tape>(compile_tape(t.graph_ptr(), t.root(), kT)));
+      EXPECT_FLOAT_EQ(e.field({0, 0, 0}), float(t.reference({0, 0, 0})));
+      continue;
+    }
+    try {
+      (void)compile_tape(t.graph_ptr(), t.root(), kT);
+      ADD_FAILURE() << "rate " << rate << " compiled";
+    } catch (const FloatRangeError& e) {
+      EXPECT_NE(std::string(e.what()).find("node twist #1: its field needs the number"), std::string::npos) << e.what();
+    }
+  }
+  // A ball's radius whose square passes the range.
+  Builder b(kT);
+  const Tree t = b.build(b.point({0, 0, 0}, {1e20}));
+  EXPECT_THROW(compile_tape(t.graph_ptr(), t.root(), kT), FloatRangeError);
+}
+
 TEST(Tape, ResultsDoNotDependOnBlockBoundariesOrThreads) {
   test::Rng rng(55);
   Builder b(kT);

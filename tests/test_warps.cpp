@@ -114,6 +114,25 @@ TEST(Warps, BoundsHoldTheImageOfTheBox) {
   }
 }
 
+// A bend's bounds listed every quarter turn its range makes: at a rate of 1e9 over a range of 2,
+// 1.3e9 of them (2 GB, then std::bad_alloc while the scene loaded). Past a whole turn, or at
+// angles doubles no longer step finely along, the bent part is bounded by its annulus.
+TEST(Warps, BendBoundsAtExtremeRatesHoldTheImageOfTheBox) {
+  test::Rng rng(34);
+  const Aabb box{{-0.7, -0.4, -1.0}, {0.5, 0.6, 1.0}};
+  for (double k : {3.0, 50.0, 1e3, 1e9, 1e15, 1e300, -1e9}) {
+    const double bend[] = {2, 0.1, -0.2, 0, -1, 1, k};  // about z, range [-1, 1]
+    const Aabb image = warp_bounds(NodeKind::Bend, bend, box);
+    ASSERT_TRUE(image.finite()) << k;
+    EXPECT_LT(glm::length(image.size()), 10.0) << k;  // the annulus: radii within the box's
+    for (int i = 0; i < 2000; ++i) {
+      const dvec3 s(uniform(rng, 0, 1), uniform(rng, 0, 1), uniform(rng, 0, 1));
+      const dvec3 q = warp_forward(NodeKind::Bend, bend, box.lo + s * box.size());
+      EXPECT_TRUE(image.expanded(1e-9).contains(q)) << "rate " << k;
+    }
+  }
+}
+
 TEST(Warps, WarpedFieldIsTheChildAtTheInverse) {
   test::Rng rng(33);
   Builder b(0.5);
