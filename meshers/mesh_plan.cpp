@@ -38,6 +38,7 @@ const char* to_string(JobStrategy s) {
     case JobStrategy::TrimBoolean: return "trim boolean";
     case JobStrategy::TrimCrop: return "trim crop";
     case JobStrategy::TrimLocalBlend: return "trim local blend";
+    case JobStrategy::Empty: return "empty";
   }
   return "?";
 }
@@ -52,6 +53,7 @@ const char* to_string(JobReason r) {
     case JobReason::NoLocalMethod: return "no local method";
     case JobReason::WindingLeaf: return "winding leaf";
     case JobReason::Fallback: return "fallback";
+    case JobReason::EmptyBounds: return "solid empty by its bounds";
   }
   return "?";
 }
@@ -97,7 +99,7 @@ struct Job {
 // Walks the tree from the root once: one job per node reached.
 class Planner {
  public:
-  Planner(const Graph& g, const MeshOptions& o) : g_(g), o_(o), job_of_(g.size(), kNoJob) {}
+  Planner(const Graph& g, double T, const MeshOptions& o) : g_(g), T_(T), o_(o), job_of_(g.size(), kNoJob) {}
 
   std::uint32_t need(NodeId n) {
     if (job_of_[n] != kNoJob) return job_of_[n];
@@ -106,7 +108,10 @@ class Planner {
     jobs.push_back(choose(n));
     std::vector<std::uint32_t> deps;
     const JobStrategy s = jobs[j].strategy;
-    if (s == JobStrategy::Global) {
+    if (s == JobStrategy::Empty) {
+      // Nothing under it is needed: an ffd under a difference whose first operand is empty was
+      // deformed and polygonized (7.4 s) before the difference found its result empty.
+    } else if (s == JobStrategy::Global) {
       std::vector<std::uint8_t> seen(g_.size(), 0);
       ffds_under(n, seen, deps);
     } else if (s == JobStrategy::TrimLocalBlend) {  // the region is a field, not a surface
@@ -163,6 +168,9 @@ class Planner {
         return set(JobStrategy::Global, JobReason::WindingLeaf);
       return set(JobStrategy::SharedLeaf, JobReason::Kind);
     }
+    // After the ffd's own strategies: prepare_fields() needs every unprepared ffd the field
+    // reaches, empty or not.
+    if (solid_empty(g_, n, T_)) return set(JobStrategy::Empty, JobReason::EmptyBounds);
     if (want == MeshStrategy::Global) return set(JobStrategy::Global, why);
     switch (kind_family(kind)) {
       case Family::Mesh:
@@ -208,6 +216,7 @@ class Planner {
   }
 
   const Graph& g_;
+  double T_;
   const MeshOptions& o_;
   std::vector<std::uint32_t> job_of_;
 };
@@ -438,6 +447,7 @@ std::shared_ptr<const TriangleMesh> Runner::execute(const Job& job, NodeReport& 
   const NodeId n = job.node;
   const double T = tree_.threshold(), h = o_.precision;
   switch (job.strategy) {
+    case JobStrategy::Empty: return std::make_shared<const TriangleMesh>();
     case JobStrategy::SharedLeaf:
       // A leaf of negative strength carves what it is blended with; alone its field is nowhere
       // above T (> 0), so its solid, and its mesh, is empty; so is an empty ffd's (strength 0).
@@ -594,7 +604,7 @@ void check_options(const MeshOptions& o) {
 
 MeshResult mesh_tree(const Tree& tree, const MeshOptions& options) {
   check_options(options);
-  Planner plan(tree.graph(), options);
+  Planner plan(tree.graph(), tree.threshold(), options);
   const std::uint32_t root = plan.need(tree.root());
   Runner runner(tree, options, std::move(plan.jobs));
   runner.run_all();
@@ -609,7 +619,7 @@ MeshResult mesh_tree(const Tree& tree, const MeshOptions& options) {
 Tree prepare_fields(const Tree& tree, const MeshOptions& options) {
   if (!needs_ffd_preparation(tree.graph(), tree.root())) return tree;
   check_options(options);
-  Planner plan(tree.graph(), options);
+  Planner plan(tree.graph(), tree.threshold(), options);
   plan.need_fields(tree.root());
   Runner runner(tree, options, std::move(plan.jobs));
   runner.run_all();

@@ -45,7 +45,8 @@ enum class MeshStrategy : std::uint8_t { Auto, Global, Local };
 
 /// What a job did.
 enum class JobStrategy : std::uint8_t {
-  SharedLeaf, Sweep, WarpedChild, DeformedChild, Global, TrimBlend, TrimBoolean, TrimCrop, TrimLocalBlend
+  SharedLeaf, Sweep, WarpedChild, DeformedChild, Global, TrimBlend, TrimBoolean, TrimCrop, TrimLocalBlend,
+  Empty  ///< the node's solid is empty by its bounds (runtime/tape.hpp solid_bounds): no mesh, no jobs under it
 };
 /// Why it did that.
 enum class JobReason : std::uint8_t {
@@ -58,6 +59,7 @@ enum class JobReason : std::uint8_t {
   WindingLeaf,    ///< a mesh leaf with "inside": "winding": its own mesh is not its solid's surface
                   ///< (polygonized), unless it is after all (SharedLeaf: meshers/winding_surface.hpp)
   Fallback,       ///< the local strategy failed; see NodeReport::fallback_cause
+  EmptyBounds,    ///< the node's solid is empty by its bounds (JobStrategy::Empty)
 };
 const char* to_string(JobStrategy s);
 const char* to_string(JobReason r);

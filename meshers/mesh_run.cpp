@@ -204,7 +204,18 @@ MeshRun run_mesh(const Tree& tree, const MeshRunOptions& o) {
   MeshRun run;
   MeshOptions& options = run.options;
   options.precision = default_precision(tree, o.precision);
-  check_precision(tree, options.precision);
+  try {
+    check_precision(tree, options.precision);
+  } catch (const PolygonizeError& e) {
+    // A precision nobody gave is named as the default it is, or the user looks for it in vain.
+    char named[48];
+    std::snprintf(named, sizeof named, "precision %g ", options.precision);
+    if (o.precision > 0 || tree.mesher_settings().precision > 0 || std::string(e.what()).find(named) == std::string::npos) throw;
+    char buf[160];
+    std::snprintf(buf, sizeof buf, " (precision %g is the default: neither --precision nor the scene's mesher.precision gave one)",
+                  options.precision);
+    throw PolygonizeError(e.what() + std::string(buf));
+  }
   // A tree whose numbers the tape cannot hold is refused before any meshing (a twist of rate
   // 1.7e308 refined its warped mesh for 10 s first). An ffd not yet meshed stops the compiler
   // too; the tape is compiled again where it is needed.

@@ -231,4 +231,32 @@ Aabb solid_bounds(const Graph& g, NodeId n, double T, bool under_blend) {
   }
 }
 
+bool solid_empty(const Graph& g, NodeId n, double T) {
+  if (solid_bounds(g, n, T).empty()) return true;
+  const auto c = g.children_of(n);
+  // An R-function union of weak operands may pass T where neither does (an intersection, as in
+  // solid_bounds, stays below its smallest operand's shifted value): only min/max unions here.
+  const bool minmax = !use_rfunction(g.boolean[n], false);
+  switch (g.kind[n]) {
+    case NodeKind::Union:
+      return minmax && std::all_of(c.begin(), c.end(), [&](NodeId child) { return solid_empty(g, child, T); });
+    case NodeKind::Intersection:
+      return std::any_of(c.begin(), c.end(), [&](NodeId child) { return solid_empty(g, child, T); });
+    case NodeKind::Difference:
+    case NodeKind::Crop:
+    case NodeKind::Affine:
+    case NodeKind::Twist:
+    case NodeKind::Taper:
+    case NodeKind::Bend: return solid_empty(g, c[0], T);
+    case NodeKind::Ffd: return g.mesh[n] == kNone && solid_empty(g, c[0], T);  // nothing to deform
+    case NodeKind::Blend:
+    case NodeKind::LocalBlend: return false;  // weak operands may sum past T
+    default: {
+      // A leaf's field is at most its strength F (on its skeleton, or inside its mesh).
+      const double F = kind_family(g.kind[n]) == Family::Mesh ? params::mesh_field(g, n, T).F : params::primitive(g, n).F;
+      return F < T;
+    }
+  }
+}
+
 }  // namespace ht

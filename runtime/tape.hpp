@@ -181,5 +181,11 @@ Interval field_interval(const Graph& graph, NodeId node, double threshold, const
 
 /// A box holding the node's solid {f >= T} (conservative; infinite when it cannot be bounded).
 Aabb solid_bounds(const Graph& graph, NodeId node, double threshold, bool under_blend = false);
+/// True when {f >= threshold} of the node (as a tree of its own) is surely empty: its bounds are
+/// empty, or it is a leaf whose strength is below the threshold (its field is at most its
+/// strength), or a Boolean, crop or warp of such (a min/max union of empty operands, an
+/// intersection with one, a difference or crop of one). A blend is never called empty here beyond its bounds:
+/// weak operands may sum past the threshold. Conservative: false says nothing.
+bool solid_empty(const Graph& graph, NodeId node, double threshold);
 
 }  // namespace ht

@@ -187,6 +187,18 @@ class Compiler {
     for (double v : values) check_float(n, v);
     return constants(values);
   }
+  // An affine map's inverse (row-major 3x4) whose linear part underflows as floats: a scale of
+  // 1e150 made every entry 0 in the tape, so the whole space mapped onto one point of the child.
+  void check_inverse_scale(NodeId n, std::span<const double> inverse) const {
+    double big = 0.0;
+    for (int r = 0; r < 3; ++r)
+      for (int c = 0; c < 3; ++c) big = std::max(big, std::abs(inverse[std::size_t(4 * r + c)]));
+    if (big >= static_cast<double>(std::numeric_limits<float>::min())) return;
+    char buf[96];
+    std::snprintf(buf, sizeof buf, "%.3g", big);
+    throw FloatRangeError("node " + g_.label(n) + ": its inverse map's largest entry, " + buf +
+                          ", is below the float range (1.2e-38) the field tape evaluates in (a scale of extreme size?)");
+  }
   void check_float(NodeId n, double v) const {
     if (!std::isfinite(v) || std::isfinite(static_cast<float>(v))) return;
     char buf[96];
@@ -358,6 +370,7 @@ class Compiler {
       case NodeKind::Affine:
         at = static_cast<std::uint32_t>(tape_.constants.size());
         for (int i = 12; i < 24; ++i) check_float(n, p[i]);
+        check_inverse_scale(n, p.subspan(12, 12));
         for (int i = 12; i < 24; ++i) tape_.constants.push_back(static_cast<float>(p[i]));
         op = OpCode::Affine;
         break;

@@ -204,6 +204,9 @@ TEST(Cli, MeshRefusesCleanlyAndLeavesNoFile) {
   EXPECT_EQ(far.code, 2);
   EXPECT_NE(far.err.find("the solid lies 1e+17 from the origin, where doubles step by 16: precision"), std::string::npos)
       << far.err;
+  // The scene gave no precision: the one named is said to be the default.
+  EXPECT_NE(far.err.find("is the default: neither --precision nor the scene's mesher.precision gave one)"), std::string::npos)
+      << far.err;
   // Scenes of extreme numbers, from an extreme-value campaign, each refused with what is wrong
   // and nothing written: a result that is no closed manifold (a curve of radius 1e-200, every
   // vertex NaN; exit 0 before); a disc of radius 1e150 (its sweep left 462 boundary edges, refused

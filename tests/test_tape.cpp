@@ -11,6 +11,7 @@
 #include "tests/support/random_tree.hpp"
 
 #include <glm/geometric.hpp>
+#include <glm/gtc/matrix_transform.hpp>
 #include <gtest/gtest.h>
 
 #include <cmath>
@@ -392,6 +393,13 @@ TEST(Tape, NumbersPastTheFloatRangeAreRefused) {
   Builder b(kT);
   const Tree t = b.build(b.point({0, 0, 0}, {1e20}));
   EXPECT_THROW(compile_tape(t.graph_ptr(), t.root(), kT), FloatRangeError);
+  // A scale whose inverse underflows: every point of space went to the child's origin.
+  const Tree huge = b.build(b.affine(b.point({0, 0, 0}, {1}), glm::scale(glm::dmat4(1.0), dvec3(1e45))));
+  EXPECT_THROW(compile_tape(huge.graph_ptr(), huge.root(), kT), FloatRangeError);
+  const Tree large = b.build(b.affine(b.point({0, 0, 0}, {1}), glm::scale(glm::dmat4(1.0), dvec3(1e30))));
+  const TapeEvaluator e(std::make_shared<const Tape>(compile_tape(large.graph_ptr(), large.root(), kT)));
+  for (const dvec3 p : {dvec3(0, 0, 0), dvec3(3e29, 0, 0), dvec3(0, 6e29, 1e29)})
+    EXPECT_NEAR(e.field(p), large.reference(p), 1e-5) << p.x << " " << p.y;
 }
 
 TEST(Tape, ResultsDoNotDependOnBlockBoundariesOrThreads) {
