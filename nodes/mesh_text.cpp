@@ -87,13 +87,28 @@ std::string quoted(std::string_view word) {
   return out;
 }
 
-// A coordinate as OpenMesh's readers took it: a float, then widened.
-bool parse_coordinate(std::string_view word, double& x) {
+// A coordinate as OpenMesh's readers took it: a float, then widened. Empty when it reads, else
+// what is wrong with it (a number past the float range, 5e-151 or 1.7e308, is no typo).
+std::string parse_coordinate(std::string_view word, double& x) {
   if (word.starts_with('+')) word.remove_prefix(1);
   float f = 0;
   const auto [end, ec] = std::from_chars(word.data(), word.data() + word.size(), f);
   x = f;
-  return ec == std::errc() && end == word.data() + word.size() && std::isfinite(f);
+  if (ec == std::errc::result_out_of_range && end == word.data() + word.size()) {
+    // Below the float range (noise such as 1e-50 in an exported file): the float it rounds to, 0
+    // or subnormal, as a stream would read it. Above it no float holds the number.
+    double d = 0;
+    const auto read = std::from_chars(word.data(), word.data() + word.size(), d);
+    const bool tiny = read.ec == std::errc() ? std::abs(d) < 1.0
+                                             : word.find("e-") != std::string_view::npos || word.find("E-") != std::string_view::npos;
+    if (tiny) {
+      x = read.ec == std::errc() ? static_cast<double>(static_cast<float>(d)) : 0.0;
+      return {};
+    }
+    return quoted(word) + " is past the float range coordinates are read in (magnitudes up to 3.4e38)";
+  }
+  if (ec == std::errc() && end == word.data() + word.size() && std::isfinite(f)) return {};
+  return quoted(word) + " is not a finite number";
 }
 
 // The header: keyword ([ST][C][N]OFF) then the vertex and face counts (and the edge count, which
@@ -130,8 +145,8 @@ std::string off_vertices(Words& words, std::uint64_t nv, bool normals, MeshRecor
       const std::string where = "vertex " + std::to_string(v);
       if (word.empty()) return "the file ends in " + where + " (the header states " + std::to_string(nv) + ")";
       double x = 0;
-      if (!parse_coordinate(word, x))
-        return where + ": " + quoted(word) + " is not a finite number (line " + std::to_string(words.line()) + ")";
+      if (const std::string bad = parse_coordinate(word, x); !bad.empty())
+        return where + ": " + bad + " (line " + std::to_string(words.line()) + ")";
       if (k < 3) p[k] = x;
     }
     words.end_line();
@@ -365,9 +380,9 @@ std::string read_obj(const std::string& text, MeshRecords& out) {
       glm::dvec3 p(0.0);
       for (int k = 0; k < 3; ++k) {
         const std::string_view word = words.next();
-        if (!parse_coordinate(word, p[k]))
-          return "vertex " + std::to_string(out.positions.size()) + ": " +
-                 (word.empty() ? std::string("needs three coordinates") : quoted(word) + " is not a finite number") + where;
+        if (word.empty()) return "vertex " + std::to_string(out.positions.size()) + ": needs three coordinates" + where;
+        if (const std::string bad = parse_coordinate(word, p[k]); !bad.empty())
+          return "vertex " + std::to_string(out.positions.size()) + ": " + bad + where;
       }
       out.positions.push_back(p);
     } else if (keyword == "f") {

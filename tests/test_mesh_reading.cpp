@@ -81,6 +81,9 @@ TEST(MeshReading, CountsBeyondTheFileAreRefusedAtOnce) {
   test::write_file(dir / "4OFF.off", "4OFF\n1 0 0\n0 0 0 1\n");
   test::write_file(dir / "huge_face.off", "OFF\n3 1 0\n0 0 0\n1 0 0\n0 1 0\n4000000000 0 1 2\n");
   test::write_file(dir / "word.off", "OFF\n3 1 0\n0 0 0\n1 x 0\n0 1 0\n3 0 1 2\n");
+  // A number past the float range coordinates are read in: told as such, not as a typo.
+  test::write_file(dir / "huge.off", "OFF\n3 1 0\n0 0 0\n1 1.7e308 0\n0 1 0\n3 0 1 2\n");
+  test::write_file(dir / "huge.obj", "v 0 0 0\nv 1 4e38 0\nv 0 1 0\nf 1 2 3\n");
   test::write_file(dir / "binary.off", std::string("OFF BINARY\n\0\0\0\4\0\0\1\0\0\0\0\0", 23) + std::string(48, '\0'));
   test::write_file(dir / "faces.ply", ply_stating("30000000", "0 0 0\n1 0 0\n0 1 0\n0 0 1\n3 0 1 2\n"));
   test::write_file(dir / "binary.ply",
@@ -112,6 +115,8 @@ TEST(MeshReading, CountsBeyondTheFileAreRefusedAtOnce) {
            {"4OFF.off", "4OFF.off: vertex dimensions other than 3 (4OFF, nOFF) are not read"},
            {"huge_face.off", "huge_face.off: the file ends in face 0 (it states 4000000000 vertices)"},
            {"word.off", "word.off: vertex 1: \"x\" is not a finite number (line 4)"},
+           {"huge.off", "huge.off: vertex 1: \"1.7e308\" is past the float range coordinates are read in (magnitudes up to 3.4e38) (line 4)"},
+           {"huge.obj", "huge.obj: vertex 1: \"4e38\" is past the float range coordinates are read in (magnitudes up to 3.4e38) (line 2)"},
            {"keyword.off", "keyword.off: no vertex and face counts after the OFF keyword"},
            {"faces.ply", "faces.ply: the file ends in element \"face\" record 1 (the header states 30000000)"},
            {"binary.ply", "binary.ply: the file ends in element \"vertex\" record 0 (the header states 2000000000)"},
@@ -133,6 +138,12 @@ TEST(MeshReading, CountsBeyondTheFileAreRefusedAtOnce) {
   EXPECT_EQ(message_of(dir / "tet.ply"), "loaded");
   test::write_file(dir / "tet.off", "OFF\n4 4 6\n" + kTetraBody);
   EXPECT_EQ(message_of(dir / "tet.off"), "loaded");
+  // Coordinates below the float range (noise an exporter left) read as the float they round to,
+  // 0 here; they were refused as "not a finite number".
+  test::write_file(dir / "noise.off", "OFF\n4 4 6\n0 0 0\n1 1e-50 0\n0 1 -4e-400\n0 0 1\n3 0 2 1\n3 0 1 3\n3 0 3 2\n3 1 2 3\n");
+  EXPECT_EQ(message_of(dir / "noise.off"), "loaded");
+  test::write_file(dir / "noise.obj", "v 0 0 0\nv 1 0 0\nv 0 1 0\nv 3e-45 0 1\nf 1 3 2\nf 1 2 4\nf 1 4 3\nf 2 3 4\n");
+  EXPECT_EQ(message_of(dir / "noise.obj"), "loaded");
   std::filesystem::remove_all(dir);
 }
 
