@@ -26,7 +26,7 @@ const std::uint64_t kDiskCacheBuild = HYBRIDTREE_SOURCE_DIGEST;
 
 // The largest enumerators a report may hold (CacheReader rejects more).
 constexpr std::uint8_t cache_enum_limit(JobStrategy) { return std::uint8_t(JobStrategy::Empty); }
-constexpr std::uint8_t cache_enum_limit(JobReason) { return std::uint8_t(JobReason::EmptyBounds); }
+constexpr std::uint8_t cache_enum_limit(JobReason) { return std::uint8_t(JobReason::UnboundedOperand); }
 
 namespace {
 

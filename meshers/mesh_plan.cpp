@@ -54,6 +54,7 @@ const char* to_string(JobReason r) {
     case JobReason::WindingLeaf: return "winding leaf";
     case JobReason::Fallback: return "fallback";
     case JobReason::EmptyBounds: return "solid empty by its bounds";
+    case JobReason::UnboundedOperand: return "an operand's solid is unbounded";
   }
   return "?";
 }
@@ -103,14 +104,20 @@ class Planner {
 
   std::uint32_t need(NodeId n) {
     if (job_of_[n] != kNoJob) return job_of_[n];
+    if (root_ == kNone) root_ = n;
     const std::uint32_t j = std::uint32_t(jobs.size());
     job_of_[n] = j;
     jobs.push_back(choose(n));
     std::vector<std::uint32_t> deps;
     const JobStrategy s = jobs[j].strategy;
     if (s == JobStrategy::Empty) {
-      // Nothing under it is needed: an ffd under a difference whose first operand is empty was
-      // deformed and polygonized (7.4 s) before the difference found its result empty.
+      // No mesh under it is needed: an ffd under a difference whose first operand is empty was
+      // deformed and polygonized (7.4 s) before the difference found its result empty. Below the
+      // root, the parent's local strategy may evaluate this node's field, and with it the ffds'.
+      if (n != root_) {
+        std::vector<std::uint8_t> seen(g_.size(), 0);
+        ffds_under(n, seen, deps);
+      }
     } else if (s == JobStrategy::Global) {
       std::vector<std::uint8_t> seen(g_.size(), 0);
       ffds_under(n, seen, deps);
@@ -169,7 +176,7 @@ class Planner {
       return set(JobStrategy::SharedLeaf, JobReason::Kind);
     }
     // After the ffd's own strategies: prepare_fields() needs every unprepared ffd the field
-    // reaches, empty or not.
+    // reaches, empty or not (need() keeps them as an empty node's deps for the same reason).
     if (solid_empty(g_, n, T_)) return set(JobStrategy::Empty, JobReason::EmptyBounds);
     if (want == MeshStrategy::Global) return set(JobStrategy::Global, why);
     switch (kind_family(kind)) {
@@ -181,6 +188,13 @@ class Planner {
       case Family::Warp: return set(JobStrategy::WarpedChild, why);
       case Family::Operator: break;
     }
+    // The local strategies trim their operands' meshes: an operand whose own solid is unbounded
+    // (a blend of two R-function differences, 1.17 T far from everything) has none, though the
+    // node itself may be bounded (intersected with a ball).
+    const auto operand_nodes = g_.children_of(n).first(kind == NodeKind::LocalBlend ? 2 : g_.child_count[n]);
+    for (NodeId c : operand_nodes)  // a local blend's region is a field, not a mesh
+      if (!solid_bounds(g_, c, T_).finite() && !solid_empty(g_, c, T_))
+        return set(JobStrategy::Global, JobReason::UnboundedOperand);
     const std::size_t operands = flat_operands(n);
     switch (kind) {
       case NodeKind::Blend: {
@@ -219,6 +233,7 @@ class Planner {
   double T_;
   const MeshOptions& o_;
   std::vector<std::uint32_t> job_of_;
+  NodeId root_ = kNone;  // the first node needed: the run's root
 };
 
 double since(std::chrono::steady_clock::time_point t0) {
@@ -474,11 +489,13 @@ std::shared_ptr<const TriangleMesh> Runner::execute(const Job& job, NodeReport& 
       WarpRemeshStats ws;
       const TriangleMesh& child = input(job, 0);
       const auto warp = forward_map(*g, n);
-      // Refined no further than the budget has room for: a twist of rate 1.7e308 stretches every
-      // edge past any count the area predicts (an infinite area caps nothing) and filled memory.
-      const std::size_t room =
-          std::size_t(double(budget_.limit() - std::min(budget_.in_use(), budget_.limit())) / kWarpedBytesPerTriangle);
-      const std::size_t cap = std::min(warp_cap(child, warp, 1.5 * h), room);
+      // Refined no further than the budget holds: a twist of rate 1.7e308 stretches every edge
+      // past any count the area predicts (an infinite area caps nothing) and filled memory. The
+      // budget's limit, not its room at the moment, so that the result does not depend on what
+      // other jobs hold then.
+      const std::size_t by_area = warp_cap(child, warp, 1.5 * h);
+      const std::size_t by_budget = std::size_t(double(budget_.limit()) / kWarpedBytesPerTriangle);
+      const std::size_t cap = std::min(by_area, by_budget);
       auto mesh = std::make_shared<const TriangleMesh>(warp_mesh(child, warp, &child_field, T, 1.5 * h, &ws, nullptr, {}, cap));
       r.edges_split = ws.edges_split;
       if (ws.stopped) {
@@ -486,7 +503,8 @@ std::shared_ptr<const TriangleMesh> Runner::execute(const Job& job, NodeReport& 
         // radians a unit): the node's own surface is polygonized, as the grid bounds it.
         mesh.reset();
         r.reason = JobReason::Fallback;
-        r.fallback_cause = "the warped mesh would need more than " + std::to_string(cap) + " triangles";
+        r.fallback_cause = "the warped mesh would need more than " + std::to_string(cap) + " triangles" +
+                           (by_budget < by_area ? " (what the memory budget holds)" : "");
         r.strategy = JobStrategy::Global;
         return global(n, g, r, false);
       }

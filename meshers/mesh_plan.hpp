@@ -46,7 +46,8 @@ enum class MeshStrategy : std::uint8_t { Auto, Global, Local };
 /// What a job did.
 enum class JobStrategy : std::uint8_t {
   SharedLeaf, Sweep, WarpedChild, DeformedChild, Global, TrimBlend, TrimBoolean, TrimCrop, TrimLocalBlend,
-  Empty  ///< the node's solid is empty by its bounds (runtime/tape.hpp solid_bounds): no mesh, no jobs under it
+  Empty  ///< the node's solid is surely empty (runtime/tape.hpp solid_empty): no mesh; below the
+         ///< root, only the ffds under it are prepared (a parent may evaluate its field)
 };
 /// Why it did that.
 enum class JobReason : std::uint8_t {
@@ -59,7 +60,8 @@ enum class JobReason : std::uint8_t {
   WindingLeaf,    ///< a mesh leaf with "inside": "winding": its own mesh is not its solid's surface
                   ///< (polygonized), unless it is after all (SharedLeaf: meshers/winding_surface.hpp)
   Fallback,       ///< the local strategy failed; see NodeReport::fallback_cause
-  EmptyBounds,    ///< the node's solid is empty by its bounds (JobStrategy::Empty)
+  EmptyBounds,    ///< the node's solid is surely empty by its bounds or strengths (JobStrategy::Empty)
+  UnboundedOperand,  ///< an operand's own solid is unbounded (no mesh to trim): polygonized
 };
 const char* to_string(JobStrategy s);
 const char* to_string(JobReason r);

@@ -2,6 +2,7 @@
 
 #include "meshers/polygonize.hpp"
 #include "meshers/surface_field.hpp"
+#include "runtime/node_params.hpp"
 #include "runtime/tape.hpp"
 
 #include <glm/geometric.hpp>
@@ -10,6 +11,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <functional>
 #include <limits>
 
 namespace ht {
@@ -19,6 +21,37 @@ double default_precision(const Tree& tree, double requested) {
   if (tree.mesher_settings().precision > 0) return tree.mesher_settings().precision;
   const Aabb solid = solid_bounds(tree.graph(), tree.root(), tree.threshold());
   return solid.finite() ? std::max(glm::length(solid.size()) / 100.0, 1e-9) : 1.0;
+}
+
+void check_float_range(const Tree& tree) {
+  // Every subtree with no unprepared ffd is compiled (an ffd stops the compiler, and a check
+  // that stopped there let a twist beside it fill memory for 25 s before its error); the
+  // subtrees under an ffd are compiled on their own.
+  const auto& g = tree.graph_ptr();
+  // Per node: 0 unknown, 1 no unprepared ffd at or under it, 2 one at least (memoized: a chain
+  // of unions over an ffd asks once a node).
+  std::vector<std::uint8_t> ffd(g->size(), 0);
+  const std::function<bool(NodeId)> has_ffd = [&](NodeId n) {
+    if (ffd[n] == 0) {
+      bool any = params::ffd_unprepared(*g, n);
+      for (NodeId c : g->children_of(n)) any = has_ffd(c) || any;
+      ffd[n] = any ? 2 : 1;
+    }
+    return ffd[n] == 2;
+  };
+  std::vector<std::uint8_t> seen(g->size(), 0);
+  std::vector<NodeId> stack{tree.root()};
+  while (!stack.empty()) {
+    const NodeId n = stack.back();
+    stack.pop_back();
+    if (seen[n]) continue;
+    seen[n] = 1;
+    if (!has_ffd(n)) {
+      (void)compile_tape(g, n, tree.threshold());
+      continue;
+    }
+    for (NodeId c : g->children_of(n)) stack.push_back(c);
+  }
 }
 
 void check_precision(const Tree& tree, double precision) {
@@ -216,15 +249,7 @@ MeshRun run_mesh(const Tree& tree, const MeshRunOptions& o) {
                   options.precision);
     throw PolygonizeError(e.what() + std::string(buf));
   }
-  // A tree whose numbers the tape cannot hold is refused before any meshing (a twist of rate
-  // 1.7e308 refined its warped mesh for 10 s first). An ffd not yet meshed stops the compiler
-  // too; the tape is compiled again where it is needed.
-  try {
-    (void)compile_tape(tree.graph_ptr(), tree.root(), tree.threshold());
-  } catch (const FloatRangeError&) {
-    throw;
-  } catch (const CompileError&) {
-  }
+  check_float_range(tree);
   // More GiB than size_t holds in bytes (--memory-budget 1e12) is no limit: the cast alone was
   // undefined and gave 0 bytes.
   const double bytes = o.memory_gib * double(1u << 30);

@@ -28,6 +28,10 @@ double default_precision(const Tree& tree, double requested);
 /// would come out empty or meaningless. run_mesh() checks it.
 void check_precision(const Tree& tree, double precision);
 
+/// Throws FloatRangeError (runtime/tape.hpp) when a number some node's field needs does not hold
+/// as a float, compiling every subtree free of unprepared ffds. run_mesh() checks it first.
+void check_float_range(const Tree& tree);
+
 struct MeshRunOptions {
   double precision = 0.0;   ///< edge length, world units; 0: default_precision()
   std::string strategy;     ///< "auto", "global" or "local"; empty: the scene's mesher.strategy

@@ -159,7 +159,7 @@ TriangleMesh polygonize_once(std::shared_ptr<const Graph> graph, NodeId root, do
   }
   if (const std::string why = unmeshable_extent(solid); !why.empty()) throw PolygonizeError(why);
   if (const std::string why = unresolvable_precision(solid, h); !why.empty()) throw PolygonizeError(why);
-  if (!solid.finite()) throw PolygonizeError("the solid {f >= T} cannot be bounded (is a blend over R-function differences?)");
+  if (!solid.finite()) throw PolygonizeError("the solid {f >= T} is unbounded: no box holds it (a blend over R-function differences?)");
   const bool clipped = !options.clip.empty();
   if (clipped) {
     solid = intersect(solid, options.clip);

@@ -195,8 +195,17 @@ Aabb solid_bounds(const Graph& g, NodeId n, double T, bool under_blend) {
   switch (g.kind[n]) {
     case NodeKind::Blend:
     case NodeKind::LocalBlend: {
-      Aabb box;
+      // A part of unbounded support (an R-function difference, about 0.586 T everywhere) is
+      // bounded by its solid only while it is the one such part: two sum past T far from both
+      // solids (a review's blend of two such differences lost a sphere elsewhere in the tree).
       const std::size_t count = g.kind[n] == NodeKind::Blend ? c.size() : 2;
+      std::size_t unbounded = 0;
+      for (std::size_t i = 0; i < count; ++i) {
+        const Aabb& s = g.support(c[i], true);
+        unbounded += !(s.finite() || s.empty());
+      }
+      if (unbounded >= 2) return support;
+      Aabb box;
       for (std::size_t i = 0; i < count; ++i) box = merge(box, part(i, true));
       return box;
     }
@@ -234,12 +243,11 @@ Aabb solid_bounds(const Graph& g, NodeId n, double T, bool under_blend) {
 bool solid_empty(const Graph& g, NodeId n, double T) {
   if (solid_bounds(g, n, T).empty()) return true;
   const auto c = g.children_of(n);
-  // An R-function union of weak operands may pass T where neither does (an intersection, as in
-  // solid_bounds, stays below its smallest operand's shifted value): only min/max unions here.
-  const bool minmax = !use_rfunction(g.boolean[n], false);
+  // Both Boolean modes: with a = fA - T < 0 and b = fB - T < 0 everywhere, the R-functions'
+  // a + b +- sqrt(a^2 + b^2) is negative too (nodes/operators.hpp), as max and min are.
   switch (g.kind[n]) {
     case NodeKind::Union:
-      return minmax && std::all_of(c.begin(), c.end(), [&](NodeId child) { return solid_empty(g, child, T); });
+      return std::all_of(c.begin(), c.end(), [&](NodeId child) { return solid_empty(g, child, T); });
     case NodeKind::Intersection:
       return std::any_of(c.begin(), c.end(), [&](NodeId child) { return solid_empty(g, child, T); });
     case NodeKind::Difference:

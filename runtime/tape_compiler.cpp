@@ -181,6 +181,12 @@ class Compiler {
     for (double v : values) tape_.constants.push_back(static_cast<float>(v));
     return at;
   }
+  // 1/x for a squared length x, or 0 when x is 0 or 1/x passes the float range: the evaluators
+  // read 0 as a degenerate segment or edge (its first point) or triangle (its edges).
+  static double float_inverse(double x) {
+    const double r = x > 0 ? 1.0 / x : 0.0;
+    return std::isfinite(static_cast<float>(r)) ? r : 0.0;
+  }
   // The constants of node n's field: each must hold as a float, the tape's arithmetic (a twist
   // rate of 4e38 became infinite there, and the tape said 0 where the tree said 1).
   std::uint32_t constants(NodeId n, std::initializer_list<double> values) {
@@ -233,10 +239,9 @@ class Compiler {
       case NodeKind::Point: push3(v(0)); op = OpCode::Point; break;
       case NodeKind::Segment: {
         const glm::dvec3 a = v(0), ab = v(3) - v(0);
-        const double len2 = glm::dot(ab, ab);
         push3(a);
         push3(ab);
-        constants(n, {len2 > 0 ? 1.0 / len2 : 0.0});
+        constants(n, {float_inverse(glm::dot(ab, ab))});
         op = OpCode::Segment;
         break;
       }
@@ -249,8 +254,12 @@ class Compiler {
         break;
       case NodeKind::Triangle: {
         const glm::dvec3 a = v(0), b = v(3), c = v(6);
-        const glm::dvec3 ba = b - a, cb = c - b, ac = a - c, nor = glm::cross(ba, ac);
-        auto inv = [](double x) { return x > 0 ? 1.0 / x : 0.0; };
+        const glm::dvec3 ba = b - a, cb = c - b, ac = a - c;
+        // A normal whose inverse square passes the float range (the rounding residue of a
+        // collinear triangle's cross product) is the degenerate triangle's: its edges alone.
+        glm::dvec3 nor = glm::cross(ba, ac);
+        if (float_inverse(glm::dot(nor, nor)) == 0.0) nor = glm::dvec3(0.0);
+        const auto inv = float_inverse;
         push3(a);
         push3(b);
         push3(c);
@@ -300,10 +309,9 @@ class Compiler {
         }
         for (std::size_t i = 0; i < segments; ++i) {
           const glm::dvec3 a = v(1 + 3 * static_cast<int>(i)), ab = end(i) - a;
-          const double len2 = glm::dot(ab, ab);
           push3(a);
           push3(ab);
-          constants(n, {len2 > 0 ? 1.0 / len2 : 0.0});
+          constants(n, {float_inverse(glm::dot(ab, ab))});
         }
         op = OpCode::Curve;
         break;

@@ -5,6 +5,7 @@
 #include "nodes/mesh_leaf.hpp"
 #include "nodes/primitives.hpp"
 #include "runtime/builder.hpp"
+#include "runtime/scene.hpp"
 #include "runtime/tape.hpp"
 #include "runtime/tape_eval.hpp"
 #include "runtime/tree_eval.hpp"
@@ -400,6 +401,24 @@ TEST(Tape, NumbersPastTheFloatRangeAreRefused) {
   const TapeEvaluator e(std::make_shared<const Tape>(compile_tape(large.graph_ptr(), large.root(), kT)));
   for (const dvec3 p : {dvec3(0, 0, 0), dvec3(3e29, 0, 0), dvec3(0, 6e29, 1e29)})
     EXPECT_NEAR(e.field(p), large.reference(p), 1e-5) << p.x << " " << p.y;
+}
+
+// A collinear triangle of small, ordinary coordinates: the rounding residue of its normal's
+// cross product made 1/|n|^2 = 1.8e47, refused as past the float range. A squared length whose
+// inverse no float holds is degenerate to the tape, as an exact 0 is (its edges alone), and the
+// tape agrees with the tree.
+TEST(Tape, NearlyDegenerateSkeletonsAreTheirEdges) {
+  const Tree t = load_scene(std::filesystem::path(HYBRIDTREE_SOURCE_DIR) / "tests/data/stress/collinear_triangle_small.json");
+  const TapeEvaluator e(std::make_shared<const Tape>(compile_tape(t.graph_ptr(), t.root(), kT)));
+  test::Rng rng(35);
+  for (int i = 0; i < 2000; ++i) {
+    const dvec3 p = 3e-4 * test::random_point(rng, 1.0);
+    EXPECT_NEAR(e.field(p), t.reference(p), 1e-4) << p.x << " " << p.y << " " << p.z;
+  }
+  Builder b(kT);
+  const Tree seg = b.build(b.segment({0, 0, 0}, {1e-21, 0, 0}, {0.5}));
+  const TapeEvaluator es(std::make_shared<const Tape>(compile_tape(seg.graph_ptr(), seg.root(), kT)));
+  EXPECT_NEAR(es.field({0.2, 0, 0}), seg.reference({0.2, 0, 0}), 1e-6);
 }
 
 TEST(Tape, ResultsDoNotDependOnBlockBoundariesOrThreads) {
