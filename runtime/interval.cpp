@@ -183,6 +183,14 @@ Interval field_interval(const Graph& g, NodeId n, double T, const Aabb& box, boo
 
 namespace ht {
 
+namespace {
+bool reaches_unprepared_ffd(const Graph& g, NodeId n) {
+  if (params::ffd_unprepared(g, n)) return true;
+  const auto c = g.children_of(n);
+  return std::any_of(c.begin(), c.end(), [&](NodeId child) { return reaches_unprepared_ffd(g, child); });
+}
+}  // namespace
+
 Aabb solid_bounds(const Graph& g, NodeId n, double T, bool under_blend) {
   const auto c = g.children_of(n);
   const Aabb& support = g.support(n, under_blend);
@@ -198,11 +206,13 @@ Aabb solid_bounds(const Graph& g, NodeId n, double T, bool under_blend) {
       // A part of unbounded support (an R-function difference, about 0.586 T everywhere) is
       // bounded by its solid only while it is the one such part: two sum past T far from both
       // solids (a review's blend of two such differences lost a sphere elsewhere in the tree).
+      // An unprepared ffd's support is a placeholder (everything) though its field, the distance
+      // to its deformed mesh, is compact: such a part is bounded by its solid, as before.
       const std::size_t count = g.kind[n] == NodeKind::Blend ? c.size() : 2;
       std::size_t unbounded = 0;
       for (std::size_t i = 0; i < count; ++i) {
         const Aabb& s = g.support(c[i], true);
-        unbounded += !(s.finite() || s.empty());
+        unbounded += !(s.finite() || s.empty()) && !reaches_unprepared_ffd(g, c[i]);
       }
       if (unbounded >= 2) return support;
       Aabb box;

@@ -181,11 +181,13 @@ class Compiler {
     for (double v : values) tape_.constants.push_back(static_cast<float>(v));
     return at;
   }
-  // 1/x for a squared length x, or 0 when x is 0 or 1/x passes the float range: the evaluators
-  // read 0 as a degenerate segment or edge (its first point) or triangle (its edges).
-  static double float_inverse(double x) {
-    const double r = x > 0 ? 1.0 / x : 0.0;
-    return std::isfinite(static_cast<float>(r)) ? r : 0.0;
+  // 1/x for a squared length x, or 0 when x is 0 or negligible against `scale2` (a square of the
+  // same kind: floats cannot tell it from 0 there): the evaluators read 0 as a degenerate segment
+  // or edge (its first point) or triangle (its edges). Measured against the node's own scale, not
+  // the float range, so that a triangle 1e-10 wide is no set of edges (a review found the tape
+  // then disagreeing with the tree); past the float range on its own it is refused (check_float).
+  static double float_inverse(double x, double scale2) {
+    return x > 0 && x > 1e-14 * scale2 ? 1.0 / x : 0.0;
   }
   // The constants of node n's field: each must hold as a float, the tape's arithmetic (a twist
   // rate of 4e38 became infinite there, and the tape said 0 where the tree said 1).
@@ -241,7 +243,7 @@ class Compiler {
         const glm::dvec3 a = v(0), ab = v(3) - v(0);
         push3(a);
         push3(ab);
-        constants(n, {float_inverse(glm::dot(ab, ab))});
+        constants(n, {float_inverse(glm::dot(ab, ab), R * R)});
         op = OpCode::Segment;
         break;
       }
@@ -255,11 +257,11 @@ class Compiler {
       case NodeKind::Triangle: {
         const glm::dvec3 a = v(0), b = v(3), c = v(6);
         const glm::dvec3 ba = b - a, cb = c - b, ac = a - c;
-        // A normal whose inverse square passes the float range (the rounding residue of a
-        // collinear triangle's cross product) is the degenerate triangle's: its edges alone.
+        // A normal negligible against its edges (the rounding residue of a collinear triangle's
+        // cross product: 1/|n|^2 was 1.8e47 and refused) is the degenerate triangle's: its edges.
         glm::dvec3 nor = glm::cross(ba, ac);
-        if (float_inverse(glm::dot(nor, nor)) == 0.0) nor = glm::dvec3(0.0);
-        const auto inv = float_inverse;
+        if (float_inverse(glm::dot(nor, nor), glm::dot(ba, ba) * glm::dot(ac, ac)) == 0.0) nor = glm::dvec3(0.0);
+        const auto inv = [&](double x) { return float_inverse(x, R * R); };
         push3(a);
         push3(b);
         push3(c);
@@ -270,7 +272,8 @@ class Compiler {
         push3(glm::cross(cb, nor));
         push3(glm::cross(ac, nor));
         push3(nor);
-        constants(n, {inv(glm::dot(ba, ba)), inv(glm::dot(cb, cb)), inv(glm::dot(ac, ac)), inv(glm::dot(nor, nor))});
+        const double n2 = glm::dot(nor, nor);
+        constants(n, {inv(glm::dot(ba, ba)), inv(glm::dot(cb, cb)), inv(glm::dot(ac, ac)), n2 > 0 ? 1.0 / n2 : 0.0});
         op = OpCode::Triangle;
         break;
       }
@@ -311,7 +314,7 @@ class Compiler {
           const glm::dvec3 a = v(1 + 3 * static_cast<int>(i)), ab = end(i) - a;
           push3(a);
           push3(ab);
-          constants(n, {float_inverse(glm::dot(ab, ab))});
+          constants(n, {float_inverse(glm::dot(ab, ab), R * R)});
         }
         op = OpCode::Curve;
         break;

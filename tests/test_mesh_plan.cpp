@@ -178,6 +178,13 @@ TEST(MeshPlan, EmptyAndUnboundedOperandsKeepTheirParentsRight) {
   bool unbounded_operand = false;
   for (const NodeReport& n : mesh_tree(blend, at(0.05)).nodes) unbounded_operand |= n.reason == JobReason::UnboundedOperand;
   EXPECT_TRUE(unbounded_operand);
+  // An unprepared ffd's support is a placeholder, not a field reaching everywhere: a blend of
+  // two stays bounded (a second review: it lost its default precision and came out empty), and
+  // a union over it keeps its local strategy.
+  const Tree ffds = load_scene(dir / "blend_of_two_ffds.json");
+  EXPECT_TRUE(solid_bounds(ffds.graph(), ffds.root(), ffds.threshold()).finite());
+  for (const NodeReport& n : mesh_tree(load_scene(dir / "union_over_blend_of_two_ffds.json"), at(0.05)).nodes)
+    EXPECT_NE(n.reason, JobReason::UnboundedOperand) << ffds.graph().label(n.node);
 }
 
 // A warped mesh's new vertices go onto the child's surface by Newton steps; where there is no

@@ -415,7 +415,11 @@ TEST(Tape, NearlyDegenerateSkeletonsAreTheirEdges) {
     const dvec3 p = 3e-4 * test::random_point(rng, 1.0);
     EXPECT_NEAR(e.field(p), t.reference(p), 1e-4) << p.x << " " << p.y << " " << p.z;
   }
+  // Degenerate is measured against the skeleton's own scale: a right triangle 1e-10 wide is no
+  // set of edges (its 1/|n|^2, 1e40, is past the float range: refused, not silently wrong).
   Builder b(kT);
+  const Tree tiny = b.build(b.triangle({0, 0, 0}, {1e-10, 0, 0}, {0, 1e-10, 0}, {1e-10}));
+  EXPECT_THROW(compile_tape(tiny.graph_ptr(), tiny.root(), kT), FloatRangeError);
   const Tree seg = b.build(b.segment({0, 0, 0}, {1e-21, 0, 0}, {0.5}));
   const TapeEvaluator es(std::make_shared<const Tape>(compile_tape(seg.graph_ptr(), seg.root(), kT)));
   EXPECT_NEAR(es.field({0.2, 0, 0}), seg.reference({0.2, 0, 0}), 1e-6);
