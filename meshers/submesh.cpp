@@ -241,11 +241,18 @@ void put_back(TriangleMesh& mesh, const Pieces& pieces, std::span<const Triangle
 
 void put_back(TriangleMesh& mesh, std::span<const glm::uvec3> rest, std::span<const TriangleMesh> changed,
               std::span<const std::vector<std::uint32_t>> origin, std::vector<std::uint32_t>* renumber) {
+  // The mesh's own arrays are rebuilt in place, each grown once to its final size: copies of
+  // them beside the parts were the peak of a trimmed Boolean's run (bunny00 minus a ball).
   const std::size_t old_count = mesh.positions.size();
-  std::vector<glm::dvec3> positions = std::move(mesh.positions);
-  std::vector<glm::uvec3> triangles;
-  std::size_t added = 0;
-  for (const TriangleMesh& c : changed) added += c.triangles.size();
+  std::size_t added = 0, fresh = 0;
+  for (std::size_t i = 0; i < changed.size(); ++i) {
+    added += changed[i].triangles.size();
+    fresh += std::size_t(std::count(origin[i].begin(), origin[i].end(), ~0u));
+  }
+  std::vector<glm::dvec3>& positions = mesh.positions;
+  positions.reserve(old_count + fresh);
+  std::vector<glm::uvec3>& triangles = mesh.triangles;
+  std::vector<glm::uvec3>().swap(triangles);  // the untaken ones are in `rest`, a copy of their own
   triangles.reserve(rest.size() + added);
   triangles.assign(rest.begin(), rest.end());
   for (std::size_t i = 0; i < changed.size(); ++i) {
@@ -262,17 +269,16 @@ void put_back(TriangleMesh& mesh, std::span<const glm::uvec3> rest, std::span<co
     }
     for (const glm::uvec3& t : changed[i].triangles) triangles.push_back({index[t[0]], index[t[1]], index[t[2]]});
   }
-  // Vertices collapsed away leave unused slots: compact, keeping the order.
+  // Vertices collapsed away leave unused slots: compacted, keeping the order (a vertex moves
+  // only down, onto a slot already read).
   std::vector<std::uint32_t> slot(positions.size(), ~0u);
   for (const glm::uvec3& t : triangles)
     for (int k = 0; k < 3; ++k) slot[t[k]] = 0;
-  mesh.positions.clear();
-  mesh.positions.reserve(std::size_t(std::count_if(slot.begin(), slot.end(), [](std::uint32_t x) { return x != ~0u; })));
+  std::uint32_t used = 0;
   for (std::uint32_t v = 0; v < positions.size(); ++v)
-    if (slot[v] != ~0u) slot[v] = std::uint32_t(mesh.positions.size()), mesh.positions.push_back(positions[v]);
-  mesh.triangles.clear();
-  mesh.triangles.reserve(triangles.size());
-  for (const glm::uvec3& t : triangles) mesh.triangles.push_back({slot[t[0]], slot[t[1]], slot[t[2]]});
+    if (slot[v] != ~0u) slot[v] = used, positions[used++] = positions[v];
+  positions.resize(used);
+  for (glm::uvec3& t : triangles) t = {slot[t[0]], slot[t[1]], slot[t[2]]};
   if (renumber) renumber->assign(slot.begin(), slot.begin() + std::ptrdiff_t(old_count));
 }
 
