@@ -21,7 +21,9 @@
 // 3 voxels), makes the spheres, composes, and extracts the zero level set (adaptivity 0), each
 // quad split along the diagonal that gives the larger smallest angle. The voxel size is searched
 // once per scene, untimed, so that OpenVDB's triangle count is within a few percent of
-// HybridTree's global one.
+// HybridTree's global one ("OpenVDB"), and again for the default strategy's count ("OpenVDB at
+// auto's count", a coarser grid): each HybridTree side is compared with OpenVDB at its own
+// triangle count, global with the first, auto with the second.
 //
 // Measured per benchmark: wall time (manual time, the best of three runs), peak memory of the
 // same run in a fresh process (bench/peak_memory.hpp), and, once per scene and side, the mesh checks
@@ -30,7 +32,7 @@
 // surface; blend: their radius of influence) plus a margin of 3 h measured to bunny00's exact
 // surface (Embree closest point), and vertices farther than the bunny's reach plus the margin to
 // the exact spheres. HybridTree's benchmarks add the ratios to OpenVDB at the same thread count
-// (x_time, x_mem, ...: HybridTree / OpenVDB), and a table of every figure and ratio goes to stderr
+// (x_time, x_mem, ...: HybridTree / OpenVDB at its triangle count), and a table of every figure and ratio goes to stderr
 // at the end.
 //
 // Quick mode (bench/main.cpp) runs both scenes coarser (h = 0.04, two tries at the voxel size)
@@ -100,12 +102,17 @@ const std::vector<PeerScene>& peer_scenes() {
 double precision() { return bench::quick_mode ? 0.04 : 0.01; }
 
 /// The sides: HybridTree's default strategy, global polygonization, global without the crease
-/// step (PolygonizeOptions::sharp_features off), and OpenVDB.
-enum Side : int { kAuto = 0, kGlobal = 1, kGlobalSmooth = 2, kVdb = 3 };
+/// step (PolygonizeOptions::sharp_features off), OpenVDB at global's triangle count, and OpenVDB
+/// at the default strategy's.
+enum Side : int { kAuto = 0, kGlobal = 1, kGlobalSmooth = 2, kVdb = 3, kVdbAtAuto = 4 };
 const char* side_name(int side) {
-  constexpr const char* names[] = {"HybridTree auto", "HybridTree global", "global, no creases", "OpenVDB"};
+  constexpr const char* names[] = {"HybridTree auto", "HybridTree global", "global, no creases", "OpenVDB",
+                                   "OpenVDB, auto's n"};
   return names[side];
 }
+bool is_vdb(int side) { return side == kVdb || side == kVdbAtAuto; }
+/// The OpenVDB side a HybridTree side is measured against: the one at its triangle count.
+int peer_of(int side) { return side == kAuto ? kVdbAtAuto : kVdb; }
 
 struct Input {
   std::vector<glm::dvec3> positions;
@@ -327,9 +334,9 @@ const SideResult& side_result(int scene, int side) {
   const PeerScene& s = peer_scenes()[std::size_t(scene)];
   const double margin = 3 * precision();
   SideResult r;
-  if (side == kVdb) {
-    const SideResult& global = side_result(scene, kGlobal);
-    r.voxel = search_voxel(s, global.quality.triangles, global.quality.checks.area);
+  if (is_vdb(side)) {
+    const SideResult& target = side_result(scene, side == kVdb ? kGlobal : kAuto);
+    r.voxel = search_voxel(s, target.quality.triangles, target.quality.checks.area);
     r.quality = measure(s, run_openvdb(s, r.voxel, input()), margin);
     r.how = "voxel " + std::to_string(r.voxel);
   } else {
@@ -351,7 +358,7 @@ void run_side(int scene, int side, int threads, double voxel) {
   const PeerScene& s = peer_scenes()[std::size_t(scene)];
   tbb::task_arena arena(threads);
   arena.execute([&] {
-    if (side == kVdb)
+    if (is_vdb(side))
       benchmark::DoNotOptimize(run_openvdb(s, voxel, input()).triangles.size());
     else
       benchmark::DoNotOptimize(run_hybridtree(s, side, precision(), input()).mesh->triangles.size());
@@ -361,7 +368,7 @@ void run_side(int scene, int side, int threads, double voxel) {
 /// The best of three timed runs of a side (one in quick mode), with its peak memory from a child
 /// process outside quick mode.
 Timing timed_run(int scene, int side, int threads) {
-  const double voxel = side == kVdb ? side_result(scene, kVdb).voxel : 0;
+  const double voxel = is_vdb(side) ? side_result(scene, side).voxel : 0;
   Timing t;
   t.seconds = 1e300;
   for (int run = 0; run < (bench::quick_mode ? 1 : 3); ++run) {
@@ -385,7 +392,7 @@ const bool registered = bench::register_peak_task("vdb_peer", [](const std::stri
   int scene = 0, side = 0, threads = 1, quick = 0;
   double voxel = 0;
   if (std::sscanf(arg.c_str(), "%d:%d:%d:%lf:%d", &scene, &side, &threads, &voxel, &quick) != 5 || scene < 0 ||
-      scene >= int(peer_scenes().size()) || side < kAuto || side > kVdb || threads < 1)
+      scene >= int(peer_scenes().size()) || side < kAuto || side > kVdbAtAuto || threads < 1)
     throw std::invalid_argument("bad argument " + arg);
   bench::quick_mode = quick != 0;
   input();  // read before the measure
@@ -416,7 +423,8 @@ struct Summary {
   MeshChecks input_checks;  ///< bunny00's own angles, which the auto strategy keeps
   ~Summary() {
     if (lines.empty()) return;
-    std::fprintf(stderr, "\nOpenVDB peer (bench/vdb_peer_bench.cpp), x = HybridTree / OpenVDB at the same threads:\n");
+    std::fprintf(stderr, "\nOpenVDB peer (bench/vdb_peer_bench.cpp), x = HybridTree / OpenVDB at the same threads\n"
+                         "and triangle count (auto against \"OpenVDB, auto's n\", global against \"OpenVDB\"):\n");
     std::fprintf(stderr, "%-6s %-17s %3s %8s %8s %8s %7s %7s %7s %10s %10s %7s %10s %10s\n", "scene", "side", "thr",
                  "tris", "s", "MiB", "self_x", "min_deg", "p1_deg", "bunny_max", "bunny_mean", "exact", "sph_max",
                  "sph_mean");
@@ -467,7 +475,7 @@ const SideResult* run_benchmark(benchmark::State& state, int scene, int side, in
   const SideResult* r = nullptr;
   try {
     r = &side_result(scene, side);
-    side_result(scene, kVdb);
+    if (!is_vdb(side)) side_result(scene, peer_of(side));
   } catch (const std::exception& e) {
     state.SkipWithError(e.what());
     return nullptr;
@@ -483,15 +491,15 @@ const SideResult* run_benchmark(benchmark::State& state, int scene, int side, in
   return r;
 }
 
-// Args: scene (0 csg, 1 blend), threads.
+// Args: scene (0 csg, 1 blend), side (3 at global's triangle count, 4 at auto's), threads.
 void BM_PeerOpenVDB(benchmark::State& state) {
   Timing t;
-  if (const SideResult* r = run_benchmark(state, int(state.range(0)), kVdb, int(state.range(1)), t))
+  if (const SideResult* r = run_benchmark(state, int(state.range(0)), int(state.range(1)), int(state.range(2)), t))
     state.counters["voxel"] = r->voxel;
 }
 BENCHMARK(BM_PeerOpenVDB)
-    ->ArgsProduct({{0, 1}, {1, 2}})
-    ->ArgNames({"scene", "threads"})
+    ->ArgsProduct({{0, 1}, {kVdb, kVdbAtAuto}, {1, 2}})
+    ->ArgNames({"scene", "side", "threads"})
     ->UseManualTime()
     ->Iterations(1)
     ->Unit(benchmark::kMillisecond);
@@ -502,8 +510,8 @@ void BM_PeerHybridTree(benchmark::State& state) {
   Timing t;
   const SideResult* r = run_benchmark(state, scene, side, threads, t);
   if (r == nullptr) return;
-  const SideResult* vdb = &side_result(scene, kVdb);
-  const Timing& tv = timing(scene, kVdb, threads);
+  const SideResult* vdb = &side_result(scene, peer_of(side));
+  const Timing& tv = timing(scene, peer_of(side), threads);
   state.counters["h"] = precision();
   state.counters["x_tris"] = ratio(double(r->quality.triangles), double(vdb->quality.triangles));
   state.counters["x_time"] = ratio(t.seconds, tv.seconds);
