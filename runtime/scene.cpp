@@ -37,6 +37,83 @@ std::string shorten_path(const std::string& path) {
   return path.substr(0, head) + "...(" + std::to_string(steps.size() - 6) + " steps)..." + path.substr(tail + 1);
 }
 
+// Where the parser stopped on a number no double holds ("1e999", 400 digits): nlohmann's
+// document parser reports such a number without a place, so the text is read again through its
+// SAX interface, which keeps the path of the value being read.
+class OverflowPlace final : public nlohmann::json_sax<json> {
+ public:
+  std::string path;   ///< the JSON path of the number, as other errors name places
+  std::string token;  ///< the number as written
+
+  bool null() override { return value(); }
+  bool boolean(bool) override { return value(); }
+  bool number_integer(number_integer_t) override { return value(); }
+  bool number_unsigned(number_unsigned_t) override { return value(); }
+  bool number_float(number_float_t, const string_t&) override { return value(); }
+  bool string(string_t&) override { return value(); }
+  bool binary(binary_t&) override { return value(); }
+  bool start_object(std::size_t) override { return value() && push(false); }
+  bool key(string_t& k) override {
+    frames_.back().key = k;
+    return true;
+  }
+  bool end_object() override { return pop(); }
+  bool start_array(std::size_t) override { return value() && push(true); }
+  bool end_array() override { return pop(); }
+  bool parse_error(std::size_t, const std::string& last_token, const nlohmann::detail::exception&) override {
+    token = last_token;
+    for (std::size_t i = 0; i < frames_.size(); ++i) {
+      const Frame& f = frames_[i];
+      if (f.array) {  // the innermost frame's failed value is the one after its last
+        path += '[';
+        path += std::to_string(i + 1 == frames_.size() ? f.index + 1 : f.index);
+        path += ']';
+      } else {
+        if (!path.empty()) path += '.';
+        path += f.key;
+      }
+    }
+    return false;
+  }
+
+ private:
+  struct Frame {
+    bool array = false;
+    std::size_t index = ~std::size_t(0);  // the array's last value read
+    std::string key;                      // the object's last key read
+  };
+  std::vector<Frame> frames_;
+  bool value() {
+    if (!frames_.empty() && frames_.back().array) ++frames_.back().index;
+    return true;
+  }
+  bool push(bool array) {
+    frames_.push_back({array, ~std::size_t(0), {}});
+    return true;
+  }
+  bool pop() {
+    frames_.pop_back();
+    return true;
+  }
+};
+
+// "path: the number N is past the range of doubles", N shortened past 24 characters; any other
+// error the parser throws past its syntax checks keeps its own words, with the path.
+std::string overflow_message(const std::string& text, const json::exception& e) {
+  OverflowPlace place;
+  json::sax_parse(text, &place);
+  const std::string where = place.path.empty() ? std::string() : shorten_path(place.path) + ": ";
+  if (e.id != 406) {  // out_of_range.406 is "number overflow"
+    std::string why = e.what();
+    const auto at = why.find("] ");
+    return where + "not valid JSON: " + (at == std::string::npos ? why : why.substr(at + 2));
+  }
+  std::string shown = place.token;
+  if (shown.size() > 24)
+    shown = shown.substr(0, 12) + "..." + shown.substr(shown.size() - 6) + " (" + std::to_string(shown.size()) + " characters)";
+  return where + "the number " + shown + " is past the range of doubles (every number must be finite)";
+}
+
 std::string type_name(const json& v) {
   if (v.is_number()) return "a number";
   if (v.is_string()) return "a string";
@@ -285,7 +362,23 @@ class Loader {
         // Made from scale, rotate and translate, the matrix is no key of the scene's: what made
         // it singular is the scale (1e200 or 1e-200: invertible on paper, not in doubles).
         if (o.has("matrix") || e.key != "matrix") throw;
-        throw Fail{o.has("scale") ? o.at("scale") : o.path(), "makes the map singular in double precision (not invertible)"};
+        if (!o.has("scale")) throw Fail{o.path(), "makes the map singular in double precision (not invertible)"};
+        const json& k = o.get("scale");
+        const glm::dvec3 v = k.is_array() ? Obj::as_vec3(k, o.at("scale")) : glm::dvec3(Obj::as_number(k, o.at("scale")));
+        // The determinant is the scales' product: past the doubles' range (1e200 cubed) or
+        // rounded to 0 (1e-200 cubed), in log10 so that the message can say how far; else the
+        // scales are too far apart (the builder's condition bound).
+        const glm::dvec3 a = glm::abs(v);
+        const double log_det = std::log10(a.x) + std::log10(a.y) + std::log10(a.z);
+        const double log_ratio = std::log10(std::max({a.x, a.y, a.z})) - std::log10(std::min({a.x, a.y, a.z}));
+        const bool out_of_range = std::abs(log_det) > 300;
+        char figure[64];
+        std::snprintf(figure, sizeof figure, "1e%+.0f", std::round(out_of_range ? log_det : log_ratio));
+        throw Fail{o.at("scale"), "makes the map singular in double precision: " +
+                                      (out_of_range ? std::string("its determinant, the scales' product (") + figure + "), " +
+                                                          (log_det > 0 ? "is past the range of doubles" : "rounds to 0")
+                                                    : std::string("its scales differ by a factor of ") + figure +
+                                                          ", past what doubles invert (a condition of 1e12)")};
       }
     } else if (type == "twist") {
       const NodeId c = child(o, "child", depth);
@@ -385,10 +478,7 @@ Tree load_scene_text(const std::string& text, const std::filesystem::path& base_
     throw SceneError(source, source + ": not valid JSON: " + why);
   } catch (const json::exception& e) {
     // A number too large for a double ("1e999"): the parser stops before any path is known.
-    std::string why = e.what();
-    const auto at = why.find("] ");
-    if (at != std::string::npos) why = why.substr(at + 2);
-    throw SceneError(source, source + ": not valid JSON: " + why + " (every number must be finite)");
+    throw SceneError(source, source + ": " + overflow_message(text, e));
   }
   try {
     Obj top(doc, "");

@@ -142,6 +142,7 @@ TEST(Cli, MeshWritesAClosedMeshAndItsStatistics) {
     const std::string out = (dir / (std::string("m") + ext)).string();
     const auto r = test::run_cli("mesh " + s + " -o " + out + " --stats-json " + (dir / "stats.json").string() + " --threads 1");
     ASSERT_EQ(r.code, 0) << r.err;
+    EXPECT_EQ(r.err.find("warning"), std::string::npos) << r.err;
     // The file reads back as a closed mesh (the mesh leaf's loader rejects anything else).
     const auto leaf = MeshLeaf::load(out);
     EXPECT_GT(leaf->report().triangles, 100u) << ext;
@@ -154,6 +155,20 @@ TEST(Cli, MeshWritesAClosedMeshAndItsStatistics) {
   EXPECT_EQ(stats["precision"], 0.05);
   EXPECT_GT(stats["triangles"].get<int>(), 100);
   EXPECT_TRUE(stats["seconds"].contains("sample"));
+  std::filesystem::remove_all(dir);
+}
+
+// A needle 2e11 long and 1 thick meshes closed at the default precision, its triangles of no
+// area against its length: the summary says "NOT watertight" and stderr says why.
+TEST(Cli, DegenerateTrianglesAreWarnedOf) {
+  const auto dir = test::temp_dir("cli-degenerate");
+  const std::string s = write_scene(dir, "s.json", R"({"hybridtree": 1, "root": {"type": "affine", "scale": [1e11, 1, 1],
+      "child": {"type": "point", "center": [0,0,0], "radius": 1}}})");
+  const std::string out = (dir / "m.off").string();
+  const auto r = test::run_cli("mesh " + s + " -o " + out + " --threads 1");
+  ASSERT_EQ(r.code, 0) << r.err;
+  EXPECT_NE(r.out.find("NOT watertight"), std::string::npos) << r.out;
+  EXPECT_NE(r.err.find("degenerate triangles"), std::string::npos) << r.err;
   std::filesystem::remove_all(dir);
 }
 
