@@ -357,7 +357,9 @@ TriangleMesh trim_local_blend(const LocalInput& in, LocalStats* stats) {
     st.patch_triangles = side.triangles.size();
     std::vector<TriangleMesh> joined_pieces;
     joined_pieces.push_back(std::move(joined));
-    out = close_with_bands(std::move(joined_pieces), std::move(side), acts, field, in, st, false);
+    // Crossings are looked for (and untangled) along the union's crease too, not only where R acts:
+    // two operands meeting at a grazing angle cross there (a ring touching bunny00's chest).
+    out = close_with_bands(std::move(joined_pieces), std::move(side), near, field, in, st, false);
   }
   // The union's crease is unflagged here, so the bands' folds are not mended as a trim blend's
   // are; one left over is a defect the global polygonizer does not have: the node falls back.

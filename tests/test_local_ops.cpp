@@ -325,6 +325,18 @@ TEST(LocalBlends, AFoldLeftInTheBandsFallsBack) {
   EXPECT_EQ(c.folded_triangles, 0u);
 }
 
+// A ring whose inside grazes bunny00's chest, blended with it only where R reaches (elsewhere):
+// the union's crease there crossed itself in 10 pairs, outside the region the trim local blend
+// searched (where R acts), and the default strategy returned them. Crossings are looked for
+// along the union's crease too now; what untangling leaves sends the node to global.
+TEST(LocalBlends, CrossingsAlongTheUnionsCreaseAreFound) {
+  const Tree tree = load_scene(std::filesystem::path(HYBRIDTREE_SOURCE_DIR) / "tests/data/stress/local_blend_grazing_ring.json");
+  const MeshResult r = mesh_tree(tree, at(tree.mesher_settings().precision));
+  const MeshChecks c = check_mesh(*r.mesh);
+  EXPECT_TRUE(c.watertight());
+  EXPECT_EQ(c.self_intersecting_pairs, 0u) << report_of(r, r.tree->root()).fallback_cause;
+}
+
 TEST(LocalCrops, PrimitivesAndMeshLeaves) {
   const std::vector<Case> cases = {
       {"cropped bunny", 0, [](Builder& b) { return b.crop(b.mesh(bunny(), {0.05}), {-0.6, -0.1, -0.5}, {0.6, 0.6, 0.5}); },

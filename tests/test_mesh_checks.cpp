@@ -450,7 +450,8 @@ TEST(MeshChecks, BlendsOfScansLeaveNoSliverAwayFromCreases) {
   };
   for (const Scene& s : {Scene{"bunny_ear.json", 5.0, 25.0, 26.0}, Scene{"bunny_garden.json", 5.0, 25.0, 25.0},
                          Scene{"winged_bunny.json", 5.0, 25.0, 11.5}, Scene{"restoration.json", 5.0, 25.0, 19.0, true},
-                         Scene{"snake_woman.json", 5.0, 25.0, 22.0, true}, Scene{"bowl.json", 5.0, 25.0, 31.5, true}}) {
+                         Scene{"snake_woman.json", 5.0, 25.0, 22.0, true}, Scene{"bowl.json", 5.0, 25.0, 31.5, true},
+                         Scene{"local_blend.json", 5.0, 25.0, 17.0}}) {
     if (s.igea && !test::igea_available()) {
       std::printf("skipping %s: no igea-67k.ply in data/meshes/ or ../shared\n", s.name);
       continue;
