@@ -21,9 +21,10 @@
 // 3 voxels), makes the spheres, composes, and extracts the zero level set (adaptivity 0), each
 // quad split along the diagonal that gives the larger smallest angle. The voxel size is searched
 // once per scene, untimed, so that OpenVDB's triangle count is within a few percent of
-// HybridTree's global one ("OpenVDB"), and again for the default strategy's count ("OpenVDB at
-// auto's count", a coarser grid): each HybridTree side is compared with OpenVDB at its own
-// triangle count, global with the first, auto with the second.
+// HybridTree's global one ("OpenVDB"), and again for the default strategy's count ("OpenVDB,
+// auto's n": a coarser grid at the full precision, where auto keeps bunny00's 75k triangles and
+// global makes twice as many; a finer one in quick mode, where global's mesh is the coarser):
+// each HybridTree side is compared with OpenVDB at its own triangle count.
 //
 // Measured per benchmark: wall time (manual time, the best of three runs), peak memory of the
 // same run in a fresh process (bench/peak_memory.hpp), and, once per scene and side, the mesh checks

@@ -55,6 +55,7 @@ Submesh take_part(const TriangleMesh& mesh, const PiecePlan& plan, std::size_t i
 /// its vertices' index in the whole mesh, or ~0u for a new vertex. Surviving vertices keep their
 /// order, new ones follow in part order, unused ones are dropped; the untaken triangles come
 /// first, then each part's. With `renumber`, receives each old vertex's new index (~0u: dropped).
+/// The mesh's arrays are rebuilt in place: `rest` must not alias mesh.triangles.
 void put_back(TriangleMesh& mesh, const Pieces& pieces, std::span<const TriangleMesh> changed,
               std::span<const std::vector<std::uint32_t>> origin, std::vector<std::uint32_t>* renumber = nullptr);
 /// The same, given the untaken triangles.

@@ -12,6 +12,7 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <limits>
 #include <set>
 #include <sstream>
 #include <vector>
@@ -102,8 +103,12 @@ class OverflowPlace final : public nlohmann::json_sax<json> {
 std::string overflow_message(const std::string& text, const json::exception& e) {
   OverflowPlace place;
   json::sax_parse(text, &place);
-  const std::string where = place.path.empty() ? std::string() : shorten_path(place.path) + ": ";
-  if (e.id != 406) {  // out_of_range.406 is "number overflow"
+  // shorten_path counts keys, not indices: a path of 10,000 nested arrays is cut here.
+  std::string path = shorten_path(place.path);
+  if (path.size() > 160)
+    path = path.substr(0, 60) + "...(" + std::to_string(path.size() - 120) + " characters)..." + path.substr(path.size() - 60);
+  const std::string where = path.empty() ? std::string() : path + ": ";
+  if (e.id != 406) {  // out_of_range.406 is "number overflow"; any other, should a later version throw one
     std::string why = e.what();
     const auto at = why.find("] ");
     return where + "not valid JSON: " + (at == std::string::npos ? why : why.substr(at + 2));
@@ -365,20 +370,31 @@ class Loader {
         if (!o.has("scale")) throw Fail{o.path(), "makes the map singular in double precision (not invertible)"};
         const json& k = o.get("scale");
         const glm::dvec3 v = k.is_array() ? Obj::as_vec3(k, o.at("scale")) : glm::dvec3(Obj::as_number(k, o.at("scale")));
-        // The determinant is the scales' product: past the doubles' range (1e200 cubed) or
-        // rounded to 0 (1e-200 cubed), in log10 so that the message can say how far; else the
-        // scales are too far apart (the builder's condition bound).
+        // Why, from the scales' logarithms (their product may overflow on the way where the
+        // determinant itself would not): the determinant past the doubles' range (1e200 cubed),
+        // rounded to 0 (1e-200 cubed), or so small that its inverse is past it (1e-103 cubed);
+        // else the scales lie too far apart for the builder's condition bound.
         const glm::dvec3 a = glm::abs(v);
         const double log_det = std::log10(a.x) + std::log10(a.y) + std::log10(a.z);
         const double log_ratio = std::log10(std::max({a.x, a.y, a.z})) - std::log10(std::min({a.x, a.y, a.z}));
-        const bool out_of_range = std::abs(log_det) > 300;
-        char figure[64];
-        std::snprintf(figure, sizeof figure, "1e%+.0f", std::round(out_of_range ? log_det : log_ratio));
-        throw Fail{o.at("scale"), "makes the map singular in double precision: " +
-                                      (out_of_range ? std::string("its determinant, the scales' product (") + figure + "), " +
-                                                          (log_det > 0 ? "is past the range of doubles" : "rounds to 0")
-                                                    : std::string("its scales differ by a factor of ") + figure +
-                                                          ", past what doubles invert (a condition of 1e12)")};
+        auto power = [](double log10_value) {
+          char b[64];
+          if (std::abs(log10_value) < 300)
+            std::snprintf(b, sizeof b, "%.2g", std::pow(10.0, log10_value));
+          else
+            std::snprintf(b, sizeof b, "1e%+.0f", std::round(log10_value));
+          return std::string(b);
+        };
+        std::string why;
+        if (log_det > std::log10(std::numeric_limits<double>::max()))
+          why = "its determinant, the scales' product (" + power(log_det) + "), is past the range of doubles";
+        else if (log_det < std::log10(std::numeric_limits<double>::denorm_min()))
+          why = "its determinant, the scales' product (" + power(log_det) + "), rounds to 0";
+        else if (log_det < std::log10(std::numeric_limits<double>::min()))
+          why = "its determinant, the scales' product (" + power(log_det) + "), has an inverse past the range of doubles";
+        else
+          why = "its scales differ by a factor of " + power(log_ratio) + ", past what doubles invert (a condition of 1e12)";
+        throw Fail{o.at("scale"), "makes the map singular in double precision: " + why};
       }
     } else if (type == "twist") {
       const NodeId c = child(o, "child", depth);

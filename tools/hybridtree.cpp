@@ -329,12 +329,14 @@ int cmd_mesh(const MeshArgs& a) {
                  "(a finer --precision may resolve the features that made them)\n",
                  a.out.c_str(), checks.self_intersecting_pairs, checks.folded_triangles);
   // Closed but not watertight: triangles of no area against the mesh's size, as a solid a
-  // hundred billion times longer than thick makes (an affine scale of [1e11, 1, 1]).
+  // hundred billion times longer than thick makes (an affine scale of [1e11, 1, 1]), or as a
+  // mesh leaf's own file may hold (the default strategy keeps its triangles).
   if (checks.degenerate_triangles > 0)
     std::fprintf(stderr,
-                 "hybridtree: warning: %s: the mesh has %zu degenerate triangles (of no area against the mesh's size: "
-                 "a solid far thinner than it is long, or a precision too coarse for its thinnest part)\n",
-                 a.out.c_str(), checks.degenerate_triangles);
+                 "hybridtree: warning: %s: the mesh has %zu degenerate triangle%s (of no area against the mesh's size: "
+                 "an input mesh's own, kept as they are, or made where a solid is far thinner than it is long or "
+                 "the precision too coarse for its thinnest part)\n",
+                 a.out.c_str(), checks.degenerate_triangles, checks.degenerate_triangles == 1 ? "" : "s");
   for (const ht::NodeReport& e : run.result.nodes)
     for (const std::string& why : e.refinements)
       std::fprintf(stderr, "hybridtree: note: node %u: the grid at %s; polygonized again with cells %g%% smaller\n", e.node,
