@@ -367,7 +367,8 @@ class Loader {
         // Made from scale, rotate and translate, the matrix is no key of the scene's: what made
         // it singular is the scale (1e200 or 1e-200: invertible on paper, not in doubles).
         if (o.has("matrix") || e.key != "matrix") throw;
-        if (!o.has("scale")) throw Fail{o.path(), "makes the map singular in double precision (not invertible)"};
+        const Fail unexplained{o.has("scale") ? o.at("scale") : o.path(), "makes the map singular in double precision (not invertible)"};
+        if (!o.has("scale")) throw unexplained;
         const json& k = o.get("scale");
         const glm::dvec3 v = k.is_array() ? Obj::as_vec3(k, o.at("scale")) : glm::dvec3(Obj::as_number(k, o.at("scale")));
         // Why, from the scales' logarithms (their product may overflow on the way where the
@@ -392,8 +393,10 @@ class Loader {
           why = "its determinant, the scales' product (" + power(log_det) + "), rounds to 0";
         else if (log_det < std::log10(std::numeric_limits<double>::min()))
           why = "its determinant, the scales' product (" + power(log_det) + "), has an inverse past the range of doubles";
+        else if (log_ratio >= 12.0 - 1e-9)
+          why = "its scales differ by a factor of " + power(log_ratio) + ", too far apart for doubles to invert (a condition of 1e12 or more)";
         else
-          why = "its scales differ by a factor of " + power(log_ratio) + ", past what doubles invert (a condition of 1e12)";
+          throw unexplained;  // the scales are not why (none of the above holds): said as before
         throw Fail{o.at("scale"), "makes the map singular in double precision: " + why};
       }
     } else if (type == "twist") {
