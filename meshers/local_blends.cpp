@@ -216,9 +216,13 @@ TriangleMesh blend_patch(const LocalInput& in, const BlendFields& bf, const std:
 
 // The operands' trimmed meshes and the patch joined by bands, evened out and untangled. Takes
 // the pieces and the patch: they are freed once joined, before the remeshing's own scratch.
-// `smooth`: the result has no crease (a trim blend's), so triangles folded over are mended.
+// `crease` flags the points of a crease among the pieces' vertices, in bridge() order (a local
+// blend's union seam; empty for a trim blend's smooth result): followed through the remeshing
+// (which keeps sharp creases of its own accord, and may move points of shallow ones), they
+// collapse only into one another while folded triangles are mended.
 TriangleMesh close_with_bands(std::vector<TriangleMesh>&& pieces, TriangleMesh&& side, const Aabb& clip,
-                              const BatchGradient& field, const LocalInput& in, LocalStats& st, bool smooth) {
+                              const BatchGradient& field, const LocalInput& in, LocalStats& st,
+                              std::vector<std::uint8_t> crease) {
   std::vector<const TriangleMesh*> ops;
   for (const TriangleMesh& piece : pieces)
     if (!piece.triangles.empty()) ops.push_back(&piece);
@@ -227,6 +231,7 @@ TriangleMesh close_with_bands(std::vector<TriangleMesh>&& pieces, TriangleMesh&&
   std::vector<TriangleMesh>().swap(pieces);
   side = TriangleMesh();
   relax_band(out, first_patch, field, in.threshold);
+  crease.resize(out.positions.size(), 0);  // the patch's vertices are no crease points
   Aabb changed;
   if (in.remesh_seams) {
     // The patch, its bands and two rings of the operands beside them are remeshed: the bands'
@@ -245,19 +250,26 @@ TriangleMesh close_with_bands(std::vector<TriangleMesh>&& pieces, TriangleMesh&&
     ro.target = st.patch_precision > 0 ? st.patch_precision : in.precision;
     for (std::size_t v = 0; v < out.positions.size(); ++v)
       if (region[v]) changed.grow(out.positions[v]);
-    remesh_region(out, region, std::vector<std::uint8_t>(out.positions.size(), 0), field, in.threshold, ro, &st.remesh);
+    std::vector<std::uint32_t> renumber;
+    remesh_region(out, region, std::vector<std::uint8_t>(out.positions.size(), 0), field, in.threshold, ro, &st.remesh,
+                  &renumber);
+    std::vector<std::uint8_t> moved(out.positions.size(), 0);
+    for (std::size_t v = 0; v < renumber.size(); ++v)
+      if (renumber[v] != ~0u) moved[renumber[v]] = crease[v];
+    crease = std::move(moved);
   }
   // Look for intersections wherever the strategy or the remeshing changed the mesh.
   changed = merge(changed.expanded(in.precision), clip);
+  // The crease points are not held to their crease here: sliding them toward their crease
+  // neighbours' midpoint left crossings that free relaxation undid (a twisted box's junction
+  // with a sphere), in a campaign of 110 local blends.
   st.self_intersections = untangle(out, std::vector<std::uint8_t>(out.positions.size(), 0), field, in.threshold, changed).size();
-  // A triangle folded over crosses nothing, so untangling does not see it: an edge of it collapses.
-  // Only where the result has no crease (a local blend's holds the union's, unflagged here).
-  // One left is a defect the global polygonizer does not have: the blend falls back.
-  if (smooth) {
-    std::vector<std::uint8_t> no_crease;
-    const UnfoldStats folds = unfold_folded(out, no_crease, field, in.threshold, false);
-    if (folds.pairs_after > 0) throw LocalFailure(std::to_string(folds.pairs_after) + " triangles folded over in the bands");
-  }
+  // A triangle folded over crosses nothing, so untangling does not see it: an edge of it
+  // collapses (a crease point only into another). One left is a defect the global polygonizer
+  // does not have: the blend falls back.
+  if (std::find(crease.begin(), crease.end(), 1) == crease.end()) crease.clear();
+  const UnfoldStats folds = unfold_folded(out, crease, field, in.threshold, false);
+  if (folds.pairs_after > 0) throw LocalFailure(std::to_string(folds.pairs_after) + " triangles folded over in the bands");
   return out;
 }
 
@@ -299,7 +311,7 @@ TriangleMesh trim_blend(const LocalInput& in, LocalStats* stats) {
     st.patch_precision = patch_stats.patch_precision;
     st.patch = patch_stats.patch;
     st.patch_triangles = patch_stats.patch_triangles;
-    out = close_with_bands(std::move(pieces), std::move(side), clip, field, in, st, true);
+    out = close_with_bands(std::move(pieces), std::move(side), clip, field, in, st, {});
   }
   if (stats) *stats = st;
   return out;
@@ -332,11 +344,15 @@ TriangleMesh trim_local_blend(const LocalInput& in, LocalStats* stats) {
   StitchOptions so = seam_options(in, false);
   so.max_gap = 0.3 * in.precision;
   so.allow_open = true;
-  TriangleMesh joined = join(std::move(pieces), so, st);
+  std::vector<std::uint8_t> seam;  // the union's crease, one flag per vertex of `joined`
+  TriangleMesh joined = join(std::move(pieces), so, st, &seam);
   TriangleMesh out;
   if (st.stitch.left_open == 0 || acts.empty()) {
     out = std::move(joined);
     st.self_intersections = intersections_in(out, near.expanded(2.0 * in.precision)).size();
+    // As a trim Boolean's seam: a triangle folded over beside the crease is mended.
+    SurfaceField surface = node_surface(in);
+    unfold_folded(out, seam, gradient_of(surface), T, false);
   } else {
     // The blended part: the node's surface where R may act, cut to where it does.
     const Graph* graph = in.graph.get();
@@ -359,10 +375,9 @@ TriangleMesh trim_local_blend(const LocalInput& in, LocalStats* stats) {
     joined_pieces.push_back(std::move(joined));
     // Crossings are looked for (and untangled) along the union's crease too, not only where R acts:
     // two operands meeting at a grazing angle cross there (a ring touching bunny00's chest).
-    out = close_with_bands(std::move(joined_pieces), std::move(side), near, field, in, st, false);
+    out = close_with_bands(std::move(joined_pieces), std::move(side), near, field, in, st, std::move(seam));
   }
-  // The union's crease is unflagged here, so the bands' folds are not mended as a trim blend's
-  // are; one left over is a defect the global polygonizer does not have: the node falls back.
+  // A folded triangle left over is a defect the global polygonizer does not have: the node falls back.
   {
     SurfaceField surface = node_surface(in);
     const std::size_t folded = folded_triangles(out, gradient_of(surface)).size();

@@ -400,7 +400,8 @@ void remesh_parts(TriangleMesh& mesh, const Pieces& pieces, std::span<const std:
 }  // namespace
 
 void remesh_region(TriangleMesh& mesh, std::span<const std::uint8_t> region, std::span<const std::uint8_t> fixed,
-                   const BatchGradient& field, double threshold, const RemeshOptions& options, RemeshStats* stats) {
+                   const BatchGradient& field, double threshold, const RemeshOptions& options, RemeshStats* stats,
+                   std::vector<std::uint32_t>* renumber_out) {
   RemeshStats st;
   // Slabs of the region first, in parallel, each triangle with a corner in the region and all
   // three in one slab; a vertex that any other triangle uses is on a rim and stays.
@@ -427,8 +428,13 @@ void remesh_region(TriangleMesh& mesh, std::span<const std::uint8_t> region, std
     const std::vector<std::uint8_t> inside = moved(region, 1), fixed2 = moved(fixed, 0);
     const std::vector<std::uint8_t> around = rings_around(mesh, seeds, inside, kBandRings);
     for (std::size_t v = 0; v < seeds.size(); ++v) seeds[v] = (seeds[v] || around[v]) && inside[v];
-    remesh_parts(mesh, take_region(mesh, seeds, true), fixed2, field, threshold, options, st, nullptr);
+    std::vector<std::uint32_t> second;
+    remesh_parts(mesh, take_region(mesh, seeds, true), fixed2, field, threshold, options, st, renumber_out ? &second : nullptr);
+    if (renumber_out)
+      for (std::uint32_t& v : renumber)
+        if (v != ~0u) v = second[v];
   }
+  if (renumber_out) *renumber_out = std::move(renumber);
   if (stats) *stats = st;
 }
 

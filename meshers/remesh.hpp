@@ -26,6 +26,7 @@
 
 #include <cstdint>
 #include <span>
+#include <vector>
 
 namespace ht {
 
@@ -40,8 +41,10 @@ struct RemeshStats {
 };
 
 /// Remeshes the triangles with a corner in `region` (one flag per vertex); `fixed` vertices do
-/// not move. Deterministic. The caller checks the result.
+/// not move and stay. Deterministic. The caller checks the result. `renumber` (if given)
+/// receives each old vertex's index in the result, ~0u for those collapsed away (as put_back).
 void remesh_region(TriangleMesh& mesh, std::span<const std::uint8_t> region, std::span<const std::uint8_t> fixed,
-                   const BatchGradient& field, double threshold, const RemeshOptions& options, RemeshStats* stats = nullptr);
+                   const BatchGradient& field, double threshold, const RemeshOptions& options, RemeshStats* stats = nullptr,
+                   std::vector<std::uint32_t>* renumber = nullptr);
 
 }  // namespace ht

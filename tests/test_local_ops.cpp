@@ -24,6 +24,7 @@
 #include <algorithm>
 #include <cstring>
 #include <filesystem>
+#include <functional>
 #include <set>
 
 using namespace ht;
@@ -335,6 +336,41 @@ TEST(LocalBlends, CrossingsAlongTheUnionsCreaseAreFound) {
   const MeshChecks c = check_mesh(*r.mesh);
   EXPECT_TRUE(c.watertight());
   EXPECT_EQ(c.self_intersecting_pairs, 0u) << report_of(r, r.tree->root()).fallback_cause;
+}
+
+// Two local blends of a campaign of 110 (docs/robustness.md) that fell back to global for one
+// or two triangles folded beside the union's crease: a thick ring through bunny00 (the fold on
+// the crease, where R does not reach) and a disc through a sphere's equator (at the crease's
+// end, where R fades). The union's seam is followed through the bands as a crease now, and the
+// folds are mended as a trim Boolean's are: both stay local, closed, uncrossed and unfolded.
+TEST(LocalBlends, FoldsBesideTheUnionsCreaseAreMended) {
+  struct Scene {
+    const char* name;
+    std::function<NodeId(Builder&)> make;
+  };
+  const std::vector<Scene> scenes = {
+      {"ring through bunny00",
+       [](Builder& b) {
+         return b.local_blend(b.mesh(bunny(), {0.03}), b.circle({0, -0.15, 0}, {0, 1, 0}, 0.45, {0.22}),
+                              b.point({-0.35, -0.15, 0.27}, {0.2}));
+       }},
+      {"disc through a sphere's equator",
+       [](Builder& b) {
+         return b.local_blend(b.mesh(MeshLeaf::load(test::cgal_mesh("sphere.off")), {0.05}),
+                              b.disc({0, 0, 0}, {0, 1, 0}, 0.75, {0.08}), b.box({0, -0.1, -1}, {1, 0.1, 1}, {0.1}));
+       }},
+  };
+  for (const Scene& s : scenes) {
+    Builder b(kT);
+    const NodeId root = s.make(b);
+    const MeshResult r = mesh_tree(b.build(root), at(0.01));
+    const NodeReport& job = report_of(r, root);
+    EXPECT_EQ(job.strategy, JobStrategy::TrimLocalBlend) << s.name << ": " << job.fallback_cause;
+    const MeshChecks c = test::checks_with_surface(r, kT);
+    EXPECT_TRUE(c.watertight()) << s.name;
+    EXPECT_EQ(c.self_intersecting_pairs, 0u) << s.name;
+    EXPECT_EQ(c.folded_triangles, 0u) << s.name;
+  }
 }
 
 TEST(LocalCrops, PrimitivesAndMeshLeaves) {
