@@ -9,6 +9,7 @@
 #include <algorithm>
 #include <cmath>
 #include <limits>
+#include <numeric>
 #include <string>
 #include <unordered_map>
 
@@ -220,11 +221,14 @@ std::vector<std::vector<std::uint32_t>> boundary_loops(const TriangleMesh& mesh)
 
 // The triangles of `m` but those with a corner marked in `drop`, unused vertices removed, the
 // others in their original order.
-TriangleMesh without(const TriangleMesh& m, const std::vector<std::uint8_t>& drop) {
+// `renumber` (if given) receives each vertex's new index, kNo for those removed.
+TriangleMesh without(const TriangleMesh& m, const std::vector<std::uint8_t>& drop, std::vector<std::uint32_t>* renumber = nullptr) {
   std::vector<std::uint8_t> used(m.positions.size(), 0);
   for (const glm::uvec3& t : m.triangles)
     if (!drop[t[0]] && !drop[t[1]] && !drop[t[2]]) used[t[0]] = used[t[1]] = used[t[2]] = 1;
-  std::vector<std::uint32_t> index(m.positions.size(), kNo);
+  std::vector<std::uint32_t> local;
+  std::vector<std::uint32_t>& index = renumber ? *renumber : local;
+  index.assign(m.positions.size(), kNo);
   TriangleMesh out;
   for (std::uint32_t v = 0; v < m.positions.size(); ++v)
     if (used[v]) index[v] = std::uint32_t(out.positions.size()), out.positions.push_back(m.positions[v]);
@@ -233,20 +237,38 @@ TriangleMesh without(const TriangleMesh& m, const std::vector<std::uint8_t>& dro
   return out;
 }
 
+bool drop_pinched_fans(TriangleMesh& mesh, std::vector<std::uint32_t>* renumber) {
+  if (renumber) {
+    renumber->resize(mesh.positions.size());
+    std::iota(renumber->begin(), renumber->end(), 0u);
+  }
+  bool changed = false;
+  for (int round = 0; round < 8; ++round) {
+    std::vector<std::uint32_t> pinched;
+    const std::vector<std::uint32_t> next = boundary_next(mesh, &pinched);
+    // A loop of one or two edges (a -> b -> a) is no band's side either.
+    for (std::uint32_t v = 0; v < next.size(); ++v)
+      if (next[v] != kNo && (next[v] == v || next[next[v]] == v)) pinched.push_back(v);
+    if (pinched.empty()) break;
+    std::vector<std::uint8_t> drop(mesh.positions.size(), 0);
+    for (std::uint32_t v : pinched) drop[v] = 1;
+    std::vector<std::uint32_t> index;
+    mesh = without(mesh, drop, &index);
+    if (renumber)
+      for (std::uint32_t& v : *renumber)
+        if (v != kNo) v = index[v];
+    changed = true;
+  }
+  return changed;
+}
+
 TriangleMesh pull_back_boundary(const TriangleMesh& mesh) {
   std::vector<std::uint8_t> drop(mesh.positions.size(), 0);
   const std::vector<std::uint32_t> next = boundary_next(mesh);
   for (std::size_t v = 0; v < next.size(); ++v) drop[v] = next[v] != kNo;
   TriangleMesh out = without(mesh, drop);
   // Pulling back can leave vertices where the new boundary touches itself: drop their fans too.
-  for (int round = 0; round < 8; ++round) {
-    std::vector<std::uint32_t> pinched;
-    boundary_next(out, &pinched);
-    if (pinched.empty()) break;
-    std::vector<std::uint8_t> pinch(out.positions.size(), 0);
-    for (std::uint32_t v : pinched) pinch[v] = 1;
-    out = without(out, pinch);
-  }
+  drop_pinched_fans(out);
   // A piece that lost every interior vertex (a lone triangle whose neighbours all touched the
   // boundary) is all rim: no seam faces it, so it goes too.
   const std::vector<std::uint32_t> rim = boundary_next(out);

@@ -35,6 +35,12 @@ struct BridgeStats {
 /// Throws BridgeError where the boundary touches itself at a vertex.
 std::vector<std::vector<std::uint32_t>> boundary_loops(const TriangleMesh& mesh);
 
+/// Removes the fans of the vertices where the boundary touches itself (two boundary edges leave
+/// them) and of the loops of one or two edges, round after round (at most 8) until none is left:
+/// what bridge() cannot pair, a few triangles nearer the band. Returns whether any went;
+/// `renumber` (if given) receives each old vertex's new index, ~0u for those removed.
+bool drop_pinched_fans(TriangleMesh& mesh, std::vector<std::uint32_t>* renumber = nullptr);
+
 /// The mesh without the triangles that touch its boundary (one ring pulled back), unused
 /// vertices removed; then without the pieces left with no vertex off their boundary (a lone
 /// triangle whose neighbours all went). A closed mesh is returned unchanged.

@@ -223,6 +223,24 @@ TriangleMesh blend_patch(const LocalInput& in, const BlendFields& bf, const std:
 TriangleMesh close_with_bands(std::vector<TriangleMesh>&& pieces, TriangleMesh&& side, const Aabb& clip,
                               const BatchGradient& field, const LocalInput& in, LocalStats& st,
                               std::vector<std::uint8_t> crease) {
+  // Where a piece's boundary touches itself, or closes a loop of one or two edges, bridge()
+  // cannot pair it: those fans go, and the band reaches a ring further there.
+  std::vector<std::uint8_t> kept_crease;
+  std::size_t first = 0;
+  for (TriangleMesh& piece : pieces) {
+    if (piece.triangles.empty()) continue;
+    const std::size_t n = piece.positions.size();
+    std::vector<std::uint32_t> renumber;
+    drop_pinched_fans(piece, &renumber);
+    if (!crease.empty()) {
+      const std::size_t at = kept_crease.size();
+      kept_crease.resize(at + piece.positions.size(), 0);
+      for (std::size_t v = 0; v < n; ++v)
+        if (renumber[v] != ~0u) kept_crease[at + renumber[v]] = crease[first + v];
+    }
+    first += n;
+  }
+  if (!crease.empty()) crease = std::move(kept_crease);
   std::vector<const TriangleMesh*> ops;
   for (const TriangleMesh& piece : pieces)
     if (!piece.triangles.empty()) ops.push_back(&piece);

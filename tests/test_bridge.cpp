@@ -159,5 +159,45 @@ TEST(Bridge, PullingBackDropsAPieceLeftWithNoInteriorVertex) {
   EXPECT_LT(back.triangles.size(), cap.triangles.size());
 }
 
+TEST(Bridge, PinchedFansAreDroppedUntilTheBoundaryIsLoops) {
+  // Two triangles around one vertex of a sphere, sharing only that vertex, taken out: two holes
+  // meet there and the boundary passes through it twice, which boundary_loops() refuses.
+  TriangleMesh m = uv_sphere(16, 8);
+  const std::uint32_t v = m.triangles[m.triangles.size() / 2][0];
+  std::vector<std::size_t> fan;
+  for (std::size_t t = 0; t < m.triangles.size(); ++t)
+    if (m.triangles[t][0] == v || m.triangles[t][1] == v || m.triangles[t][2] == v) fan.push_back(t);
+  ASSERT_GE(fan.size(), 5u);
+  auto shared = [&](std::size_t a, std::size_t b) {
+    int n = 0;
+    for (int i = 0; i < 3; ++i)
+      for (int k = 0; k < 3; ++k) n += m.triangles[a][i] == m.triangles[b][k];
+    return n;
+  };
+  std::size_t other = 0;
+  for (std::size_t i = 1; i < fan.size() && !other; ++i)
+    if (shared(fan[0], fan[i]) == 1) other = fan[i];
+  ASSERT_NE(other, 0u);
+  const TriangleMesh before = part(m, [&](std::size_t t, const glm::dvec3&) { return t != fan[0] && t != other; });
+  EXPECT_THROW(boundary_loops(before), BridgeError);
+  TriangleMesh after = before;
+  std::vector<std::uint32_t> renumber;
+  EXPECT_TRUE(drop_pinched_fans(after, &renumber));
+  ASSERT_EQ(renumber.size(), before.positions.size());
+  EXPECT_EQ(boundary_loops(after).size(), 1u);  // the two holes and the fan between them are one
+  EXPECT_TRUE(check_mesh(after).oriented());
+  std::size_t gone = 0;
+  for (std::size_t w = 0; w < renumber.size(); ++w) {
+    if (renumber[w] == ~0u) ++gone;
+    else EXPECT_EQ(after.positions[renumber[w]], before.positions[w]);
+  }
+  EXPECT_EQ(gone, 1u);  // only the pinch: its neighbours keep triangles of their own
+  EXPECT_EQ(after.triangles.size(), before.triangles.size() - (fan.size() - 2));
+  // A mesh with no pinch is left as it is.
+  TriangleMesh closed = uv_sphere(16, 8);
+  EXPECT_FALSE(drop_pinched_fans(closed));
+  EXPECT_EQ(closed.triangles.size(), m.triangles.size());
+}
+
 }  // namespace
 }  // namespace ht
