@@ -219,7 +219,8 @@ TriangleMesh blend_patch(const LocalInput& in, const BlendFields& bf, const std:
 // `crease` flags the points of a crease among the pieces' vertices, in bridge() order (a local
 // blend's union seam; empty for a trim blend's smooth result): followed through the remeshing
 // (which keeps sharp creases of its own accord, and may move points of shallow ones), they
-// collapse only into one another while folded triangles are mended.
+// collapse only into one another while folded triangles are mended, and the crease's band goes
+// through the quality pass last (local::polish_seam).
 TriangleMesh close_with_bands(std::vector<TriangleMesh>&& pieces, TriangleMesh&& side, const Aabb& clip,
                               const BatchGradient& field, const LocalInput& in, LocalStats& st,
                               std::vector<std::uint8_t> crease) {
@@ -288,6 +289,16 @@ TriangleMesh close_with_bands(std::vector<TriangleMesh>&& pieces, TriangleMesh&&
   if (std::find(crease.begin(), crease.end(), 1) == crease.end()) crease.clear();
   const UnfoldStats folds = unfold_folded(out, crease, field, in.threshold, false);
   if (folds.pairs_after > 0) throw LocalFailure(std::to_string(folds.pairs_after) + " triangles folded over in the bands");
+  if (!crease.empty() && in.remesh_seams && in.polygonize.quality.enabled && st.self_intersections == 0) {
+    // The union's crease as welded keeps its operands' edges where they crossed it, however
+    // close together; polished as a trim Boolean's seams are (the stitched one stays where the
+    // polish made triangles cross or fold).
+    TriangleMesh stitched = out;
+    std::vector<std::uint8_t> stitched_crease = crease;
+    polish_seam(out, crease, *node_tape(in), in.threshold, in.precision);
+    if (!intersections_in(out, changed).empty() || !folded_triangles(out, field).empty())
+      out = std::move(stitched), crease = std::move(stitched_crease);
+  }
   return out;
 }
 

@@ -443,6 +443,8 @@ TEST(MeshChecks, BlendsOfScansLeaveNoSliverAwayFromCreases) {
   // Beside creases too (all made triangles' first percentile, made_p1): a crease point may go
   // into a neighbour 0.3 of an edge away; at 0.1 these were 10.5, 17.4, 20.2 and 30.9 on the
   // winged bunny, restoration, the snake-woman and the bowl, now 11.9, 20.0, 22.9 and 32.1.
+  // The local blend's union crease is polished as a Boolean's seams are since the nineteenth
+  // stop: its made_p1 17.5 -> 28.7 degrees.
   struct Scene {
     const char* name;
     double min, p1, made_p1;
@@ -451,7 +453,7 @@ TEST(MeshChecks, BlendsOfScansLeaveNoSliverAwayFromCreases) {
   for (const Scene& s : {Scene{"bunny_ear.json", 5.0, 25.0, 26.0}, Scene{"bunny_garden.json", 5.0, 25.0, 25.0},
                          Scene{"winged_bunny.json", 5.0, 25.0, 11.5}, Scene{"restoration.json", 5.0, 25.0, 19.0, true},
                          Scene{"snake_woman.json", 5.0, 25.0, 22.0, true}, Scene{"bowl.json", 5.0, 25.0, 31.5, true},
-                         Scene{"local_blend.json", 5.0, 25.0, 17.0}}) {
+                         Scene{"local_blend.json", 5.0, 25.0, 27.0}}) {
     if (s.igea && !test::igea_available()) {
       std::printf("skipping %s: no igea-67k.ply in data/meshes/ or ../shared\n", s.name);
       continue;
