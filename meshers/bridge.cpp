@@ -245,10 +245,7 @@ bool drop_pinched_fans(TriangleMesh& mesh, std::vector<std::uint32_t>* renumber)
   bool changed = false;
   for (int round = 0; round < 8; ++round) {
     std::vector<std::uint32_t> pinched;
-    const std::vector<std::uint32_t> next = boundary_next(mesh, &pinched);
-    // A loop of one or two edges (a -> b -> a) is no band's side either.
-    for (std::uint32_t v = 0; v < next.size(); ++v)
-      if (next[v] != kNo && (next[v] == v || next[next[v]] == v)) pinched.push_back(v);
+    boundary_next(mesh, &pinched);
     if (pinched.empty()) break;
     std::vector<std::uint8_t> drop(mesh.positions.size(), 0);
     for (std::uint32_t v : pinched) drop[v] = 1;

@@ -36,8 +36,8 @@ struct BridgeStats {
 std::vector<std::vector<std::uint32_t>> boundary_loops(const TriangleMesh& mesh);
 
 /// Removes the fans of the vertices where the boundary touches itself (two boundary edges leave
-/// them) and of the loops of one or two edges, round after round (at most 8) until none is left:
-/// what bridge() cannot pair, a few triangles nearer the band. Returns whether any went;
+/// them), round after round (at most 8) until none is left: what bridge() cannot pair, a few
+/// triangles nearer the band. Returns whether any went;
 /// `renumber` (if given) receives each old vertex's new index, ~0u for those removed.
 bool drop_pinched_fans(TriangleMesh& mesh, std::vector<std::uint32_t>* renumber = nullptr);
 

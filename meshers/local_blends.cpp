@@ -5,6 +5,7 @@
 #include "meshers/local_parts.hpp"
 #include "meshers/brick_extract.hpp"
 #include "meshers/bridge.hpp"
+#include "meshers/edges.hpp"
 #include "meshers/relax.hpp"
 #include "meshers/remesh.hpp"
 #include "meshers/unfold.hpp"
@@ -375,6 +376,9 @@ TriangleMesh trim_local_blend(const LocalInput& in, LocalStats* stats) {
   so.allow_open = true;
   std::vector<std::uint8_t> seam;  // the union's crease, one flag per vertex of `joined`
   TriangleMesh joined = join(std::move(pieces), so, st, &seam);
+  // stitch() flags every vertex of a piece's rim; where R acts the rim stays open for the bands,
+  // and those are no crease points.
+  for (const BoundaryEdge& e : boundary_edges(joined)) seam[e.from] = seam[e.to] = 0;
   TriangleMesh out;
   if (st.stitch.left_open == 0 || acts.empty()) {
     out = std::move(joined);

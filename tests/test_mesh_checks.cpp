@@ -444,7 +444,7 @@ TEST(MeshChecks, BlendsOfScansLeaveNoSliverAwayFromCreases) {
   // into a neighbour 0.3 of an edge away; at 0.1 these were 10.5, 17.4, 20.2 and 30.9 on the
   // winged bunny, restoration, the snake-woman and the bowl, now 11.9, 20.0, 22.9 and 32.1.
   // The local blend's union crease is polished as a Boolean's seams are since the nineteenth
-  // stop: its made_p1 17.5 -> 28.7 degrees.
+  // stop: its made_p1 17.5 -> 28.6 degrees.
   struct Scene {
     const char* name;
     double min, p1, made_p1;
