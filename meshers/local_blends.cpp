@@ -225,8 +225,8 @@ TriangleMesh blend_patch(const LocalInput& in, const BlendFields& bf, const std:
 TriangleMesh close_with_bands(std::vector<TriangleMesh>&& pieces, TriangleMesh&& side, const Aabb& clip,
                               const BatchGradient& field, const LocalInput& in, LocalStats& st,
                               std::vector<std::uint8_t> crease) {
-  // Where a piece's boundary touches itself, or closes a loop of one or two edges, bridge()
-  // cannot pair it: those fans go, and the band reaches a ring further there.
+  // Where a piece's boundary touches itself, bridge() cannot pair it: those fans go, and the
+  // band reaches a ring further there.
   std::vector<std::uint8_t> kept_crease;
   std::size_t first = 0;
   for (TriangleMesh& piece : pieces) {
@@ -295,10 +295,8 @@ TriangleMesh close_with_bands(std::vector<TriangleMesh>&& pieces, TriangleMesh&&
     // close together; polished as a trim Boolean's seams are (the stitched one stays where the
     // polish made triangles cross or fold).
     TriangleMesh stitched = out;
-    std::vector<std::uint8_t> stitched_crease = crease;
     polish_seam(out, crease, *node_tape(in), in.threshold, in.precision);
-    if (!intersections_in(out, changed).empty() || !folded_triangles(out, field).empty())
-      out = std::move(stitched), crease = std::move(stitched_crease);
+    if (!intersections_in(out, changed).empty() || !folded_triangles(out, field).empty()) out = std::move(stitched);
   }
   return out;
 }
@@ -379,13 +377,14 @@ TriangleMesh trim_local_blend(const LocalInput& in, LocalStats* stats) {
   // stitch() flags every vertex of a piece's rim; where R acts the rim stays open for the bands,
   // and those are no crease points.
   for (const BoundaryEdge& e : boundary_edges(joined)) seam[e.from] = seam[e.to] = 0;
+  SurfaceField surface = node_surface(in);
+  const BatchGradient field = gradient_of(surface);
   TriangleMesh out;
   if (st.stitch.left_open == 0 || acts.empty()) {
     out = std::move(joined);
     st.self_intersections = intersections_in(out, near.expanded(2.0 * in.precision)).size();
     // As a trim Boolean's seam: a triangle folded over beside the crease is mended.
-    SurfaceField surface = node_surface(in);
-    unfold_folded(out, seam, gradient_of(surface), T, false);
+    unfold_folded(out, seam, field, T, false);
   } else {
     // The blended part: the node's surface where R may act, cut to where it does.
     const Graph* graph = in.graph.get();
@@ -399,8 +398,6 @@ TriangleMesh trim_local_blend(const LocalInput& in, LocalStats* stats) {
       fr(points, values);
       for (double& v : values) v = eps - v;
     };
-    SurfaceField surface = node_surface(in);
-    const BatchGradient field = gradient_of(surface);
     TriangleMesh side = pull_back_boundary(cut_mesh(p, in_region, cut_options(in)));
     relax_boundary(side, field, T);
     st.patch_triangles = side.triangles.size();
@@ -411,11 +408,8 @@ TriangleMesh trim_local_blend(const LocalInput& in, LocalStats* stats) {
     out = close_with_bands(std::move(joined_pieces), std::move(side), near, field, in, st, std::move(seam));
   }
   // A folded triangle left over is a defect the global polygonizer does not have: the node falls back.
-  {
-    SurfaceField surface = node_surface(in);
-    const std::size_t folded = folded_triangles(out, gradient_of(surface)).size();
-    if (folded > 0) throw LocalFailure(std::to_string(folded) + " triangles folded over in the bands");
-  }
+  const std::size_t folded = folded_triangles(out, field).size();
+  if (folded > 0) throw LocalFailure(std::to_string(folded) + " triangles folded over in the bands");
   if (stats) *stats = st;
   return out;
 }
